@@ -1,0 +1,33 @@
+# make demo | make test | make bench | make lint  -- everything runs in a local virtual environment (.venv)
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed-stamp
+
+.PHONY: install demo test bench lint clean
+
+install: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	mkdir -p out
+	$(BIN)/stipple torus samples/astronaut256.png -M 30150 -N 650 --tol 1e-3 \
+		-o out/astronaut.csv -o out/astronaut.svg -o out/astronaut.png
+	@echo "wrote out/astronaut.csv out/astronaut.svg out/astronaut.png"
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+bench: $(STAMP)
+	$(BIN)/python bench/run.py --output bench/results.json
+
+lint: $(STAMP)
+	$(BIN)/ruff check stipple tests bench
+
+clean:
+	rm -rf $(VENV) out .pytest_cache

@@ -1,0 +1,9 @@
+"""stipple: halftoning on the torus and the sphere by minimising a discrepancy with NUFFT-based CG."""
+
+from .errors import StippleError
+from .halftone import HalftoneResult
+from .inputs import load_density
+from .torus import halftone_torus
+
+__version__ = "0.1.0"
+__all__ = ["HalftoneResult", "StippleError", "halftone_torus", "load_density", "__version__"]

@@ -1,0 +1,208 @@
+"""Nonlinear conjugate gradients with Daniel's beta and a Newton step (Gräf, Potts, Steidl §4.2).
+
+Euclidean on the torus and Riemannian on the sphere: the manifold supplies inner products,
+retraction (exponential map) and transport; the objective supplies energy, differential and
+Hessian-vector products at its current points.
+"""
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+STATUSES = ("converged", "max_iterations", "time_limit", "stopped", "no_descent")
+
+
+@dataclass
+class CGState:
+    """Everything the iteration needs to continue; saved by checkpoints as it is."""
+
+    points: np.ndarray
+    gradient: np.ndarray
+    direction: np.ndarray
+    hess_gradient: np.ndarray
+    hess_direction: np.ndarray
+    iteration: int
+    initial_gradient_norm: float
+    energies: list = field(default_factory=list)
+    gradient_norms: list = field(default_factory=list)
+
+    @property
+    def energy(self):
+        return self.energies[-1]
+
+    @property
+    def relative_gradient_norm(self):
+        if self.initial_gradient_norm == 0:
+            return 0.0
+        return self.gradient_norms[-1] / self.initial_gradient_norm
+
+
+@dataclass
+class OptimizeResult:
+    """Outcome of ``minimize``: final points, why it stopped, and the history."""
+
+    points: np.ndarray
+    status: str
+    message: str
+    iterations: int
+    energy: float
+    relative_gradient_norm: float
+    energies: np.ndarray
+    gradient_norms: np.ndarray
+    seconds: float
+    state: CGState
+
+    @property
+    def success(self):
+        return self.status in ("converged", "max_iterations", "time_limit")
+
+
+def initial_state(objective, manifold, points):
+    """Energy, gradient and the steepest-descent direction at the starting points."""
+    objective.set_points(points)
+    gradient = manifold.riesz(points, objective.gradient())
+    (hess_gradient,) = [manifold.riesz(points, hv) for hv in objective.hessian_vectors([gradient])]
+    norm = manifold.norm(points, gradient)
+    return CGState(
+        points=points,
+        gradient=gradient,
+        direction=-gradient,
+        hess_gradient=hess_gradient,
+        hess_direction=-hess_gradient,
+        iteration=0,
+        initial_gradient_norm=norm,
+        energies=[objective.energy()],
+        gradient_norms=[norm],
+    )
+
+
+def cg_step(objective, manifold, state, restart_every):
+    """One CG iteration; returns the next state, or ``None`` if no descent step exists."""
+    points, gradient = state.points, state.gradient
+    direction, hess_direction = state.direction, state.hess_direction
+    curvature = manifold.inner(points, direction, hess_direction)
+    if not curvature > 0:
+        direction, hess_direction = -gradient, -state.hess_gradient
+        curvature = manifold.inner(points, direction, hess_direction)
+        if not curvature > 0:
+            return None
+    step = -manifold.inner(points, direction, gradient) / curvature * direction
+    new_points = manifold.retract(points, step)
+    objective.set_points(new_points)
+    new_gradient = manifold.riesz(new_points, objective.gradient())
+    moved = manifold.transport(points, step, direction)
+    hess_gradient, hess_moved = (
+        manifold.riesz(new_points, hv) for hv in objective.hessian_vectors([new_gradient, moved])
+    )
+    beta = manifold.inner(new_points, new_gradient, hess_moved) / manifold.inner(new_points, moved, hess_moved)
+    new_direction = -new_gradient + beta * moved
+    new_hess_direction = -hess_gradient + beta * hess_moved
+    iteration = state.iteration + 1
+    restart = restart_every and iteration % restart_every == 0
+    if restart or not manifold.inner(new_points, new_direction, new_gradient) < 0:
+        new_direction, new_hess_direction = -new_gradient, -hess_gradient
+    return replace(
+        state,
+        points=new_points,
+        gradient=new_gradient,
+        direction=new_direction,
+        hess_gradient=hess_gradient,
+        hess_direction=new_hess_direction,
+        iteration=iteration,
+        energies=state.energies + [objective.energy()],
+        gradient_norms=state.gradient_norms + [manifold.norm(new_points, new_gradient)],
+    )
+
+
+def minimize(
+    objective,
+    manifold,
+    points=None,
+    *,
+    state=None,
+    tol=1e-3,
+    max_iterations=1000,
+    time_limit=None,
+    restart_every=None,
+    callback=None,
+):
+    """Minimise ``objective`` over point sets on ``manifold`` by nonlinear CG.
+
+    Parameters
+    ----------
+    objective : Discrepancy
+    manifold : Torus or Sphere
+    points : numpy.ndarray, optional
+        Starting points (ignored when ``state`` is given).
+    state : CGState, optional
+        A saved state to continue from (checkpoint resume).
+    tol : float
+        Stop when ``|grad E| / |grad E_0| <= tol``.
+    max_iterations : int
+        Total iteration count at which to stop (counting iterations done before a resume).
+    time_limit : float, optional
+        Seconds after which to stop (checked after each iteration).
+    restart_every : int, optional
+        Restart with steepest descent every this many iterations (default: never, besides the
+        automatic restarts when the direction is not a descent direction).
+    callback : callable, optional
+        ``callback(state)`` after the start and every iteration; returning True stops the run.
+
+    Returns
+    -------
+    OptimizeResult
+    """
+    started = time.perf_counter()
+    if state is None:
+        state = initial_state(objective, manifold, points)
+    status = None
+    if callback is not None and callback(state):
+        status = "stopped"
+    while status is None:
+        status = _stop_reason(state, tol, max_iterations, time_limit, time.perf_counter() - started)
+        if status is not None:
+            break
+        following = cg_step(objective, manifold, state, restart_every)
+        if following is None:
+            status = "no_descent"
+            break
+        state = following
+        if callback is not None and callback(state):
+            status = "stopped"
+    return _result(state, status, time.perf_counter() - started)
+
+
+def _stop_reason(state, tol, max_iterations, time_limit, elapsed):
+    if state.relative_gradient_norm <= tol:
+        return "converged"
+    if state.iteration >= max_iterations:
+        return "max_iterations"
+    if time_limit is not None and elapsed >= time_limit:
+        return "time_limit"
+    return None
+
+
+_MESSAGES = {
+    "converged": "relative gradient norm {rel:.3g} <= tol after {it} iterations",
+    "max_iterations": "reached {it} iterations (relative gradient norm {rel:.3g})",
+    "time_limit": "time limit reached after {it} iterations (relative gradient norm {rel:.3g})",
+    "stopped": "stopped on request after {it} iterations (relative gradient norm {rel:.3g})",
+    "no_descent": "no descent direction with positive curvature after {it} iterations",
+}
+
+
+def _result(state, status, seconds):
+    message = _MESSAGES[status].format(it=state.iteration, rel=state.relative_gradient_norm)
+    return OptimizeResult(
+        points=state.points,
+        status=status,
+        message=message,
+        iterations=state.iteration,
+        energy=state.energy,
+        relative_gradient_norm=state.relative_gradient_norm,
+        energies=np.asarray(state.energies),
+        gradient_norms=np.asarray(state.gradient_norms),
+        seconds=seconds,
+        state=state,
+    )

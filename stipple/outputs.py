@@ -1,0 +1,177 @@
+"""Writing dots: CSV, SVG, PNG and GeoJSON, always atomically (temporary file, fsync, rename)."""
+
+import io
+import json
+import os
+import re
+import tempfile
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from .errors import StippleError
+
+FORMATS = (".csv", ".svg", ".png", ".geojson", ".json")
+UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "px": 25.4 / 96}
+SUPERSAMPLE = 4
+
+
+def output_format(path):
+    """The format of ``path`` by its extension (``-`` is CSV on stdout)."""
+    if str(path) == "-":
+        return ".csv"
+    extension = os.path.splitext(str(path))[1].lower()
+    if extension not in FORMATS:
+        raise StippleError(f"{path}: unknown output format {extension or '(none)'}; use one of {', '.join(FORMATS)}")
+    return extension
+
+
+def check_writable(path):
+    """Raise if the directory of ``path`` cannot take a new file (checked before a long run)."""
+    if str(path) == "-":
+        return
+    directory = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(directory):
+        raise StippleError(f"{path}: directory {directory} does not exist")
+    if not os.access(directory, os.W_OK | os.X_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise StippleError(f"{path}: not writable")
+    if os.path.isdir(path):
+        raise StippleError(f"{path}: is a directory")
+
+
+def atomic_write(path, data):
+    """Write ``data`` (bytes) to ``path`` so that readers see the old file or the whole new one."""
+    directory = os.path.dirname(os.path.abspath(path))
+    try:
+        handle, temporary = tempfile.mkstemp(dir=directory, prefix=".stipple-", suffix=".tmp")
+    except OSError as error:
+        raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+    try:
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(data)
+            stream.flush()
+            os.fsync(stream.fileno())
+        if os.path.exists(path):
+            os.chmod(temporary, os.stat(path).st_mode & 0o777)
+        else:
+            os.chmod(temporary, 0o666 & ~_umask())
+        os.replace(temporary, path)
+    except OSError as error:
+        os.unlink(temporary)
+        raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def parse_length(text):
+    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"800px"`` or a bare number (mm) -> (value, unit)."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|in|px)?\s*", str(text))
+    if not match or float(match.group(1)) <= 0:
+        raise StippleError(f"length must be a positive number with a unit (mm, cm, in, px), not {text!r}")
+    return float(match.group(1)), match.group(2) or "mm"
+
+
+def csv_bytes(columns, names, digits=6):
+    """CSV with a header row; fixed-point numbers so that output is byte-stable."""
+    lines = [",".join(names)]
+    table = np.column_stack(columns)
+    lines.extend(",".join(f"{value:.{digits}f}" for value in row) for row in table)
+    return ("\n".join(lines) + "\n").encode()
+
+
+def svg_bytes(centres, size, physical_width, radius, comment=""):
+    """Filled circles at ``centres`` in a ``size = (width, height)`` user-unit canvas.
+
+    ``physical_width`` is ``(value, unit)``; ``radius`` in user units.
+    """
+    width, height = size
+    value, unit = physical_width
+    physical_height = value * height / width
+    parts = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{value:g}{unit}" height="{physical_height:.6g}{unit}" '
+        f'viewBox="0 0 {width:g} {height:g}">',
+    ]
+    if comment:
+        parts.append(f"<!-- {comment} -->")
+    parts.append('<g fill="black" stroke="none">')
+    parts.extend(f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{radius:.4f}"/>' for x, y in centres)
+    parts.append("</g>\n</svg>\n")
+    return "\n".join(parts).encode()
+
+
+def render_dots(centres, size, pixels_wide, radius, background=None):
+    """An antialiased grayscale PNG of black discs on white (or on ``background``, a PIL image).
+
+    ``centres`` and ``radius`` are in user units of a canvas of ``size = (width, height)``; the picture
+    is ``pixels_wide`` pixels wide, drawn at 4× and reduced with a box filter.
+    """
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    canvas_size = (int(round(width * scale)), int(round(height * scale)))
+    canvas = Image.new("L", canvas_size, 255)
+    if background is not None:
+        canvas.paste(background.resize(canvas_size, Image.BILINEAR))
+    draw = ImageDraw.Draw(canvas)
+    r = max(radius * scale, 0.5)
+    for x, y in np.asarray(centres) * scale:
+        draw.ellipse((x - r, y - r, x + r, y + r), fill=0)
+    return canvas.reduce(SUPERSAMPLE)
+
+
+def png_bytes(image):
+    buffer = io.BytesIO()
+    image.save(buffer, format="PNG", optimize=False)
+    return buffer.getvalue()
+
+
+def geojson_bytes(lon_lat, properties=None):
+    """A FeatureCollection with one MultiPoint feature (lon, lat in degrees)."""
+    feature = {
+        "type": "Feature",
+        "properties": properties or {},
+        "geometry": {"type": "MultiPoint", "coordinates": np.round(lon_lat, 7).tolist()},
+    }
+    return (json.dumps({"type": "FeatureCollection", "features": [feature]}) + "\n").encode()
+
+
+def to_user_units(length, physical_width, canvas_width):
+    """A physical ``(value, unit)`` length in user units of a canvas ``physical_width`` wide."""
+    value, unit = length
+    width_value, width_unit = physical_width
+    return value * UNITS[unit] / (width_value * UNITS[width_unit]) * canvas_width
+
+
+def ink_radius(ink_area, count):
+    """Radius at which ``count`` discs cover ``ink_area`` (the density's mass): the mean tone is kept."""
+    return float(np.sqrt(ink_area / (np.pi * count)))
+
+
+def default_png_width(count):
+    return int(max(1024, 8 * round(np.sqrt(count) / 2)))
+
+
+def torus_output(points, shape, fmt, *, width=(200.0, "mm"), dot_radius=None, png_width=None, ink=None):
+    """Bytes of torus ``points`` (unit coordinates) in ``fmt`` for an image of ``shape = (H, W)``.
+
+    CSV is ``x,y`` in pixel units (origin top-left, y down). SVG and PNG draw discs of
+    ``dot_radius`` (physical ``(value, unit)``) or, by default, of the radius at which the dots' ink
+    equals ``ink`` (the density's mean, 0..1; half the image if unknown).
+    """
+    rows, columns = shape
+    pixels = points * np.array([columns, rows])
+    if fmt == ".csv":
+        return csv_bytes([pixels[:, 0], pixels[:, 1]], ["x", "y"])
+    if fmt in (".geojson", ".json"):
+        raise StippleError("GeoJSON output is for sphere points")
+    if dot_radius is None:
+        radius = ink_radius((0.5 if ink is None else ink) * rows * columns, len(points))
+    else:
+        radius = to_user_units(dot_radius, width, columns)
+    if fmt == ".svg":
+        return svg_bytes(pixels, (columns, rows), width, radius, comment=f"{len(points)} dots")
+    return png_bytes(render_dots(pixels, (columns, rows), png_width or default_png_width(len(points)), radius))

@@ -1,0 +1,154 @@
+"""Halftoning on the torus: an image's exact Fourier coefficients, the ball-discrepancy kernel, sampling."""
+
+import numpy as np
+
+from .errors import StippleError
+from .halftone import Problem, check_bandwidth, check_count, default_threads, run
+from .inputs import check_grid
+from .kernels import ball_kernel
+from .manifolds import Torus
+from .objective import Discrepancy
+from .transforms import BACKENDS, TorusFourier, make_nufft, torus_modes
+
+DEFAULT_EPSILON = 1e-9
+
+
+def default_bandwidth(n_points):
+    """The paper's ratio for Fig. 5.1 (M = 30150, N = 650): ``N ≈ 3.74 sqrt(M)``, rounded up to even."""
+    return int(2 * np.ceil(1.87 * np.sqrt(n_points)))
+
+
+def torus_scale(shape):
+    """Physical side lengths ``(W/L, H/L)``, ``L = max(W, H)``, of the torus for a ``(H, W)`` grid."""
+    rows, columns = shape
+    longest = max(rows, columns)
+    return np.array([columns / longest, rows / longest])
+
+
+def axis_bandwidths(bandwidth, shape):
+    """Per-axis bandwidths ``(N1, N2)`` (x, y), even, giving the same resolution in both directions."""
+    scale = torus_scale(shape)
+    return tuple(int(max(2, 2 * round(bandwidth * s / 2))) for s in scale)
+
+
+def cell_factor(k, cells):
+    """``(1 - e^{-2 pi i k / n}) / (2 pi i k / n)``: the Fourier integral of one cell of ``n``, ``1`` at ``k = 0``."""
+    z = 2j * np.pi * np.asarray(k, dtype=float) / cells
+    safe = np.where(z == 0, 1.0, z)
+    return np.where(z == 0, 1.0, (1 - np.exp(-safe)) / safe)
+
+
+def image_coefficients(weights, bandwidths):
+    """Exact ``w_n = int_{[0,1)^2} w(u) e^{-2 pi i n.u} du`` of the pixel-constant image, ``|n_j| <= N_j/2``.
+
+    Returns an array of shape ``(N1+1, N2+1)``, first axis ``n1`` (x, columns), second ``n2`` (y, rows).
+    """
+    rows, columns = weights.shape
+    spectrum = np.fft.fft2(weights)
+    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
+    n1, n2 = n1.astype(int), n2.astype(int)
+    dft = spectrum[n2 % rows, n1 % columns]
+    return dft * cell_factor(n1, columns) * cell_factor(n2, rows) / (rows * columns)
+
+
+def torus_kernel(bandwidths, scale):
+    """``kB(|xi|)`` with ``xi = (n1 / scale_x, n2 / scale_y)``; ``k_0 = 0``."""
+    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
+    kernel = ball_kernel(np.hypot(n1 / scale[0], n2 / scale[1]))
+    kernel[bandwidths[0] // 2, bandwidths[1] // 2] = 0.0
+    return kernel
+
+
+def sample_image(weights, rng, count):
+    """``count`` i.i.d. points in [0, 1)² with density proportional to the pixel-constant ``weights``."""
+    rows, columns = weights.shape
+    cumulative = np.cumsum(weights.ravel())
+    cells = np.searchsorted(cumulative, rng.random(count) * cumulative[-1], side="right")
+    cells = np.minimum(cells, weights.size - 1)
+    row, column = np.divmod(cells, columns)
+    offsets = rng.random((count, 2))
+    return np.stack([(column + offsets[:, 0]) / columns, (row + offsets[:, 1]) / rows], axis=1)
+
+
+def check_weights(weights):
+    weights = check_grid(np.asarray(weights, dtype=np.float64), "weights")
+    if np.any(weights < 0):
+        raise StippleError("weights must be non-negative")
+    if not np.any(weights > 0):
+        raise StippleError("the image is blank (all white): there is nothing to place dots on")
+    return weights
+
+
+def torus_problem(weights, n_points, bandwidth=None, *, backend="ducc0", threads=None,
+                  epsilon=DEFAULT_EPSILON, hessian="gauss-newton"):
+    """The halftoning problem of ``weights`` (rows top to bottom) with ``n_points`` dots on T²."""
+    weights = check_weights(weights)
+    n_points = check_count(n_points)
+    bandwidth = check_bandwidth(default_bandwidth(n_points) if bandwidth is None else bandwidth)
+    if backend not in BACKENDS:
+        raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+    threads = default_threads() if threads is None else threads
+    scale = torus_scale(weights.shape)
+    bandwidths = axis_bandwidths(bandwidth, weights.shape)
+    target = image_coefficients(weights, bandwidths)
+    fourier = TorusFourier(make_nufft(backend, (bandwidths[0] + 1, bandwidths[1] + 1), epsilon, threads))
+    objective = Discrepancy(
+        fourier, torus_kernel(bandwidths, scale), target, weight=weights.mean() / n_points, hessian=hessian
+    )
+    return Problem(
+        domain="torus",
+        manifold=Torus(scale),
+        objective=objective,
+        n_points=n_points,
+        bandwidth=bandwidth,
+        sample=lambda rng, count: sample_image(weights, rng, count),
+        settings={"domain": "torus", "points": n_points, "bandwidth": bandwidth, "kernel": "ball",
+                  "hessian": hessian, "shape": list(weights.shape)},
+    )
+
+
+def halftone_torus(weights, n_points, bandwidth=None, *, init="density", seed=0, tol=1e-4, iterations=2000,
+                   time_limit=None, backend="ducc0", threads=None, epsilon=DEFAULT_EPSILON,
+                   hessian="gauss-newton", restart_every=None, callback=None, state=None):
+    """Place ``n_points`` dots on the torus so that they reproduce the density ``weights``.
+
+    Parameters
+    ----------
+    weights : array_like, shape (H, W)
+        Density ``w >= 0`` per pixel, row 0 at the top (dark image regions have large ``w``;
+        ``stipple.load_density`` turns an image file into one).
+    n_points : int
+        Number of dots M, 1 <= M <= 20,000,000.
+    bandwidth : int, optional
+        Even bandwidth N of the kernel along the longer image side (default ``default_bandwidth(M)``).
+    init : {"density", "uniform"} or array of shape (M, 2)
+        Starting points: i.i.d. from ``weights`` (default), uniform, or given in [0, 1)² unit coordinates.
+    seed : int
+        Seed of the random starting points.
+    tol, iterations, time_limit :
+        Stop at relative gradient norm ``tol``, after ``iterations`` iterations, or after ``time_limit`` s.
+    backend : {"ducc0", "finufft"}
+        NUFFT library.
+    threads : int, optional
+        Threads for the transforms (default: all usable CPUs).
+    epsilon : float
+        Requested accuracy of the transforms.
+    hessian : {"gauss-newton", "full"}
+        Hessian used by the Newton step and Daniel's beta.
+    restart_every : int, optional
+        Periodic steepest-descent restarts.
+    callback : callable, optional
+        ``callback(state)`` after every iteration (``stipple.optimize.CGState``); return True to stop.
+    state : CGState, optional
+        Continue a saved run instead of starting from ``init``.
+
+    Returns
+    -------
+    HalftoneResult
+        ``points`` of shape (M, 2) in unit coordinates [0, 1)² (x right, y down); multiply by
+        ``(W, H)`` for pixel units.
+    """
+    problem = torus_problem(weights, n_points, bandwidth, backend=backend, threads=threads,
+                            epsilon=epsilon, hessian=hessian)
+    return run(problem, init=init, seed=seed, tol=tol, iterations=iterations, time_limit=time_limit,
+               restart_every=restart_every, callback=callback, state=state)

@@ -1,0 +1,98 @@
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+
+
+@pytest.fixture
+def image_path(tmp_path):
+    gradient = np.tile(np.linspace(0, 255, 24, dtype=np.uint8), (16, 1))
+    path = tmp_path / "ramp.png"
+    Image.fromarray(gradient).save(path)
+    return path
+
+
+def run(args, **kwargs):
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+
+
+def test_writes_csv_svg_png(image_path, tmp_path):
+    outputs = [tmp_path / name for name in ("dots.csv", "dots.svg", "dots.png")]
+    args = ["torus", image_path, "-M", 150, "-N", 24, "--iterations", 5, "-q"]
+    result = run(args + [item for path in outputs for item in ("-o", path)])
+    assert result.exit_code == 0, result.output
+    table = np.loadtxt(outputs[0], delimiter=",", skiprows=1)
+    assert outputs[0].read_text().startswith("x,y\n")
+    assert table.shape == (150, 2)
+    assert np.all((table[:, 0] >= 0) & (table[:, 0] < 24) & (table[:, 1] >= 0) & (table[:, 1] < 16))
+    # More dots where the ramp is dark (left): w = 1 - u.
+    assert np.sum(table[:, 0] < 12) > 2 * np.sum(table[:, 0] >= 12)
+    svg = outputs[1].read_text()
+    assert svg.count("<circle") == 150 and 'width="200mm"' in svg and 'height="133.333mm"' in svg
+    picture = Image.open(outputs[2])
+    assert picture.size == (1024, 683)
+    assert np.asarray(picture).min() < 50
+
+
+def test_csv_to_stdout_by_default(image_path):
+    result = run(["torus", image_path, "-M", 40, "-N", 12, "--iterations", 2, "-q"])
+    assert result.exit_code == 0
+    lines = result.stdout.splitlines()
+    assert lines[0] == "x,y" and len(lines) == 41
+
+
+def test_invert_puts_dots_on_white(image_path):
+    result = run(["torus", image_path, "-M", 200, "-N", 16, "--iterations", 3, "-q", "--invert"])
+    table = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")
+    assert np.sum(table[:, 0] >= 12) > 2 * np.sum(table[:, 0] < 12)
+
+
+def test_same_seed_same_bytes(image_path):
+    args = ["torus", image_path, "-M", 60, "-N", 12, "--iterations", 4, "-q", "--threads", 1]
+    assert run(args).stdout == run(args).stdout
+    assert run(args).stdout != run(args + ["--seed", 7]).stdout
+
+
+def test_init_from_csv_continues_from_those_points(image_path, tmp_path):
+    start = tmp_path / "start.csv"
+    run(["torus", image_path, "-M", 60, "-N", 12, "--iterations", 0, "-q", "-o", start])
+    result = run(["torus", image_path, "-M", 60, "-N", 12, "--iterations", 0, "-q", "--init", start])
+    assert result.stdout == start.read_text()
+
+
+@pytest.mark.parametrize(
+    "extra,message",
+    [
+        (["-M", 0], "number of points must be an integer in [1,"),
+        (["-N", 7], "bandwidth must be an even integer"),
+        (["-N", -4], "bandwidth must be an even integer"),
+        (["-o", "dots.xyz"], "unknown output format .xyz"),
+        (["-o", "/nonexistent-dir/dots.csv"], "does not exist"),
+        (["--width", "wide"], "length must be a positive number"),
+        (["--gamma", 0], "gamma must be a positive number"),
+        (["--tol", -1], "tol must be a positive number"),
+    ],
+)
+def test_bad_options_give_one_line_errors(image_path, extra, message):
+    result = run(["torus", image_path, "-M", 20, "-N", 8, "--iterations", 1, "-q"] + extra)
+    assert result.exit_code == 1
+    assert message in result.output
+    assert "Traceback" not in result.output and len(result.output.strip().splitlines()) == 1
+
+
+def test_usage_errors_exit_two(image_path):
+    result = run(["torus", image_path, "--backend", "nope"])
+    assert result.exit_code == 2
+    result = run(["torus", image_path, "--iterations", -1])
+    assert result.exit_code == 2
+
+
+def test_missing_and_blank_inputs(tmp_path):
+    result = run(["torus", tmp_path / "missing.png", "-q"])
+    assert result.exit_code == 1 and "cannot read" in result.output
+    blank = tmp_path / "white.png"
+    Image.new("L", (8, 8), 255).save(blank)
+    result = run(["torus", blank, "-q"])
+    assert result.exit_code == 1 and "blank" in result.output

@@ -1,0 +1,102 @@
+import numpy as np
+import pytest
+from scipy.special import roots_legendre
+
+from stipple.torus import (
+    axis_bandwidths,
+    halftone_torus,
+    image_coefficients,
+    sample_image,
+    torus_problem,
+)
+from stipple.transforms import torus_modes
+
+
+def brute_force_coefficients(weights, bandwidths):
+    """Pixel by pixel: each cell's integral of exp(-2 pi i n.u) by 24-point Gauss-Legendre per axis."""
+    rows, columns = weights.shape
+    nodes, gauss = roots_legendre(24)
+    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
+
+    def cell_integrals(frequencies, cells):
+        left = np.arange(cells)[:, None] / cells
+        x = left + (nodes[None, :] + 1) / (2 * cells)
+        return np.exp(-2j * np.pi * frequencies[:, None, None] * x[None]) @ gauss / (2 * cells)
+
+    along_x = cell_integrals(n1[:, 0], columns)  # (N1+1, columns)
+    along_y = cell_integrals(n2[0, :], rows)  # (N2+1, rows)
+    return np.einsum("rc,ac,br->ab", weights, along_x, along_y)
+
+
+@pytest.mark.parametrize("shape,bandwidth", [((5, 7), 6), ((6, 4), 20), ((3, 3), 30)])
+def test_image_coefficients_are_exact_integrals(rng, shape, bandwidth):
+    weights = rng.random(shape)
+    bandwidths = axis_bandwidths(bandwidth, shape)
+    exact = brute_force_coefficients(weights, bandwidths)
+    np.testing.assert_allclose(image_coefficients(weights, bandwidths), exact, atol=1e-14)
+
+
+def test_axis_bandwidths_keep_resolution_isotropic():
+    assert axis_bandwidths(100, (50, 100)) == (100, 50)
+    assert axis_bandwidths(100, (100, 100)) == (100, 100)
+    assert axis_bandwidths(10, (3, 100)) == (10, 2)
+
+
+@pytest.mark.parametrize("k", [8, 13])
+def test_lattice_has_zero_error_below_its_size(k):
+    """A k×k lattice integrates exp(2 pi i n.u) exactly unless k divides both n_j: zero error while N/2 < k."""
+    grid = (np.arange(k) + 0.5) / k
+    lattice = np.stack(np.meshgrid(grid, grid, indexing="ij"), axis=-1).reshape(-1, 2)
+    flat = np.ones((4, 4))
+    below = torus_problem(flat, k * k, 2 * k - 2, threads=1, epsilon=1e-13).objective
+    below.set_points(lattice)
+    above = torus_problem(flat, k * k, 2 * k, threads=1, epsilon=1e-13).objective
+    above.set_points(lattice)
+    assert below.energy() < 1e-25
+    assert above.energy() > 1e-6
+
+
+def test_samples_follow_the_image():
+    weights = np.zeros((4, 8))
+    weights[1, 6] = 3.0
+    weights[3, 0] = 1.0
+    points = sample_image(weights, np.random.default_rng(0), 4000)
+    in_first = (points[:, 0] >= 6 / 8) & (points[:, 0] < 7 / 8) & (points[:, 1] >= 1 / 4) & (points[:, 1] < 2 / 4)
+    in_second = (points[:, 0] < 1 / 8) & (points[:, 1] >= 3 / 4)
+    assert np.all(in_first | in_second)
+    assert in_first.mean() == pytest.approx(0.75, abs=0.03)
+
+
+def test_halftone_decreases_energy_monotonically_and_is_reproducible(rng):
+    weights = np.outer(np.linspace(0.1, 1, 24), np.linspace(1, 0.2, 32))
+    first = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3)
+    second = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3)
+    assert first.iterations == 60
+    np.testing.assert_array_equal(first.points, second.points)
+    rises = np.diff(first.energies) / first.energies[:-1]
+    assert rises.max() < 1e-12
+    assert first.energies[-1] < 0.2 * first.energies[0]
+    assert np.all((first.points >= 0) & (first.points < 1))
+
+
+def test_backends_reach_the_same_energy():
+    weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
+    energies = [
+        halftone_torus(weights, 200, 30, iterations=15, tol=1e-12, threads=1, backend=backend,
+                       epsilon=1e-11).energies
+        for backend in ("ducc0", "finufft")
+    ]
+    np.testing.assert_allclose(energies[0], energies[1], rtol=1e-6)
+
+
+def test_full_hessian_also_descends():
+    weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
+    result = halftone_torus(weights, 200, 30, iterations=30, tol=1e-12, threads=1, hessian="full")
+    assert result.energies[-1] < 0.2 * result.energies[0]
+
+
+def test_stops_at_tolerance():
+    weights = np.ones((8, 8))
+    result = halftone_torus(weights, 100, 16, iterations=5000, tol=1e-2, threads=1)
+    assert result.status == "converged"
+    assert result.relative_gradient_norm <= 1e-2

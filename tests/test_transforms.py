@@ -1,0 +1,57 @@
+import numpy as np
+import pytest
+
+from stipple.transforms import BACKENDS, TorusFourier, make_nufft, torus_modes
+
+
+def direct_matrix(points, shape):
+    """exp(-2 pi i n . p_i) for every point and mode, shape (M, N1+1, N2+1)."""
+    n1, n2 = torus_modes(shape)
+    return np.exp(-2j * np.pi * (n1[None] * points[:, 0, None, None] + n2[None] * points[:, 1, None, None]))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_nufft_against_direct_sums(backend, rng):
+    shape = (11, 7)
+    points = rng.random((60, 2))
+    nufft = make_nufft(backend, shape, 1e-12, 1)
+    nufft.set_points(points)
+    matrix = direct_matrix(points, shape)
+    values = rng.standard_normal((2, 60)) + 1j * rng.standard_normal((2, 60))
+    coeffs = rng.standard_normal((2,) + shape) + 1j * rng.standard_normal((2,) + shape)
+    np.testing.assert_allclose(nufft.type1(values), np.einsum("bm,mxy->bxy", values, matrix), atol=1e-9)
+    np.testing.assert_allclose(nufft.type2(coeffs), np.einsum("bxy,mxy->bm", coeffs, matrix.conj()), atol=1e-9)
+
+
+def test_backends_agree_on_a_large_problem(rng):
+    shape = (201, 201)
+    points = rng.random((5000, 2))
+    values = rng.standard_normal((1, 5000)) + 0j
+    results = []
+    for backend in BACKENDS:
+        nufft = make_nufft(backend, shape, 1e-9, 2)
+        nufft.set_points(points)
+        results.append(nufft.type1(values)[0])
+    scale = np.abs(results[0]).max()
+    assert np.abs(results[0] - results[1]).max() < 1e-8 * scale
+
+
+def test_packed_gradient_transforms_match_direct_formulas(rng):
+    shape = (9, 13)
+    points = rng.random((40, 2))
+    fourier = TorusFourier(make_nufft("ducc0", shape, 1e-13, 1))
+    fourier.set_points(points)
+    matrix = direct_matrix(points, shape)
+    n1, n2 = torus_modes(shape)
+    # A Hermitian coefficient array, as every residual of real data is.
+    coeffs = fourier.analysis() * (1 + n1**2 + n2**2) ** -1.0
+    expected = np.stack(
+        [np.real(np.einsum("xy,mxy->m", 2j * np.pi * n * coeffs, matrix.conj())) for n in (n1, n2)], axis=1
+    )
+    np.testing.assert_allclose(fourier.gradient_synthesis([coeffs])[0], expected, atol=1e-10)
+    vectors = rng.standard_normal((40, 2))
+    expected = np.einsum("mxy,mxy->xy", -2j * np.pi * (n1[None] * vectors[:, 0, None, None]
+                                                     + n2[None] * vectors[:, 1, None, None]), matrix)
+    np.testing.assert_allclose(fourier.gradient_analysis([vectors])[0], expected, atol=1e-10)
+    second = np.einsum("xy,mxy->m", -4 * np.pi**2 * n1 * n2 * coeffs, matrix.conj()).real
+    np.testing.assert_allclose(fourier.hessian_synthesis(coeffs)[:, 0, 1], second, atol=1e-9)
