@@ -32,8 +32,7 @@ class Progress:
     def __call__(self, state):
         if self.bar is not None:
             self.bar.update(state.iteration - self.last)
-            self.bar.set_postfix_str(f"E={state.energy:.4e} |g|/|g0|={state.relative_gradient_norm:.2e}",
-                                     refresh=False)
+            self.bar.set_postfix_str(f"E={state.energy:.4e} |g|/|g0|={state.relative_gradient_norm:.2e}", refresh=False)
         self.last = state.iteration
         return False
 
@@ -45,30 +44,56 @@ class Progress:
 def run_options(function):
     """Options shared by ``torus`` and ``sphere``: size, stopping, reproducibility, speed, outputs."""
     options = [
-        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True,
-                     help="Number of dots."),
-        click.option("-N", "--bandwidth", type=int, default=None,
-                     help="Even kernel bandwidth (default: from M, see README)."),
-        click.option("--iterations", type=click.IntRange(min=0), default=2000, show_default=True,
-                     help="Maximum number of CG iterations."),
-        click.option("--tol", type=float, default=1e-4, show_default=True,
-                     help="Stop at this gradient norm relative to the start."),
+        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
+        click.option(
+            "-N", "--bandwidth", type=int, default=None, help="Even kernel bandwidth (default: from M, see README)."
+        ),
+        click.option(
+            "--iterations",
+            type=click.IntRange(min=0),
+            default=2000,
+            show_default=True,
+            help="Maximum number of CG iterations.",
+        ),
+        click.option(
+            "--tol",
+            type=float,
+            default=1e-4,
+            show_default=True,
+            help="Stop at this gradient norm relative to the start.",
+        ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
-        click.option("--threads", type=click.IntRange(min=1), default=None,
-                     help="Transform threads (default: all usable CPUs)."),
-        click.option("--epsilon", type=click.FloatRange(min=1e-14, max=1e-2), default=None,
-                     help="Requested accuracy of the transforms."),
+        click.option(
+            "--threads", type=click.IntRange(min=1), default=None, help="Transform threads (default: all usable CPUs)."
+        ),
+        click.option(
+            "--epsilon",
+            type=click.FloatRange(min=1e-14, max=1e-2),
+            default=None,
+            help="Requested accuracy of the transforms.",
+        ),
         click.option("--invert", is_flag=True, help="White dots on black: w = u instead of 1 - u."),
         click.option("--gamma", type=float, default=1.0, show_default=True, help="Apply w**gamma."),
-        click.option("--range", "value_range", type=(float, float), default=None,
-                     help="For .npy maps: the values sent to 0 and 1 (default: min and max)."),
-        click.option("-o", "--output", "outputs", multiple=True, default=("-",), show_default=True,
-                     help="Output file (.csv .svg .png, sphere also .geojson); repeatable; '-' is CSV on stdout."),
+        click.option(
+            "--range",
+            "value_range",
+            type=(float, float),
+            default=None,
+            help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
+        ),
+        click.option(
+            "-o",
+            "--output",
+            "outputs",
+            multiple=True,
+            default=("-",),
+            show_default=True,
+            help="Output file (.csv .svg .png, sphere also .geojson); repeatable; '-' is CSV on stdout.",
+        ),
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG (default: keeps the mean tone)."),
-        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None,
-                     help="PNG width in pixels."),
+        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
         click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary."),
     ]
     for option in reversed(options):
@@ -114,9 +139,7 @@ def emit(path, data):
 
 def report(result, quiet, started):
     if not quiet:
-        click.echo(
-            f"{result.message}; E={result.energy:.6e}, {time.perf_counter() - started:.1f} s", err=True
-        )
+        click.echo(f"{result.message}; E={result.energy:.6e}, {time.perf_counter() - started:.1f} s", err=True)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -128,14 +151,42 @@ def main():
 @main.command()
 @click.argument("image")
 @run_options
-@click.option("--init", default="density", show_default=True,
-              help="Start: 'density' (i.i.d. from the image), 'uniform', or a CSV of x,y pixel positions.")
-@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True,
-              help="NUFFT library.")
-@click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton",
-              show_default=True, help="Hessian of the Newton step and Daniel's beta.")
-def torus(image, n_points, bandwidth, iterations, tol, time_limit, seed, threads, epsilon, invert, gamma,
-          value_range, outputs, width, dot_radius, png_width, quiet, init, backend, hessian):
+@click.option(
+    "--init",
+    default="density",
+    show_default=True,
+    help="Start: 'density' (i.i.d. from the image), 'uniform', or a CSV of x,y pixel positions.",
+)
+@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@click.option(
+    "--hessian",
+    type=click.Choice(["gauss-newton", "full"]),
+    default="gauss-newton",
+    show_default=True,
+    help="Hessian of the Newton step and Daniel's beta.",
+)
+def torus(
+    image,
+    n_points,
+    bandwidth,
+    iterations,
+    tol,
+    time_limit,
+    seed,
+    threads,
+    epsilon,
+    invert,
+    gamma,
+    value_range,
+    outputs,
+    width,
+    dot_radius,
+    png_width,
+    quiet,
+    init,
+    backend,
+    hessian,
+):
     """Stipple IMAGE (PNG, JPEG, TIFF, or a .npy map; '-' for stdin) on the torus."""
     from .outputs import torus_output
     from .torus import DEFAULT_EPSILON, halftone_torus
@@ -149,15 +200,24 @@ def torus(image, n_points, bandwidth, iterations, tol, time_limit, seed, threads
         progress = Progress(iterations, quiet)
         try:
             result = halftone_torus(
-                weights, n_points, bandwidth, init=start, seed=seed, tol=tol, iterations=iterations,
-                time_limit=time_limit, backend=backend, threads=threads or default_threads(),
-                epsilon=epsilon or DEFAULT_EPSILON, hessian=hessian, callback=progress,
+                weights,
+                n_points,
+                bandwidth,
+                init=start,
+                seed=seed,
+                tol=tol,
+                iterations=iterations,
+                time_limit=time_limit,
+                backend=backend,
+                threads=threads or default_threads(),
+                epsilon=epsilon or DEFAULT_EPSILON,
+                hessian=hessian,
+                callback=progress,
             )
         finally:
             progress.close()
         for path in outputs:
-            emit(path, torus_output(result.points, weights.shape, output_format(path), ink=weights.mean(),
-                                    **settings))
+            emit(path, torus_output(result.points, weights.shape, output_format(path), ink=weights.mean(), **settings))
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     report(result, quiet, started)

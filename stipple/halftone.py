@@ -94,8 +94,18 @@ def initial_points(problem, init, rng):
     return points
 
 
-def run(problem, *, init="density", seed=0, tol=1e-4, iterations=2000, time_limit=None,
-        restart_every=None, callback=None, state=None):
+def run(
+    problem,
+    *,
+    init="density",
+    seed=0,
+    tol=1e-4,
+    iterations=2000,
+    time_limit=None,
+    restart_every=None,
+    callback=None,
+    state=None,
+):
     """Optimise ``problem`` from ``init`` (or continue from ``state``) and collect the result."""
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)

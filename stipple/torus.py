@@ -79,8 +79,9 @@ def check_weights(weights):
     return weights
 
 
-def torus_problem(weights, n_points, bandwidth=None, *, backend="ducc0", threads=None,
-                  epsilon=DEFAULT_EPSILON, hessian="gauss-newton"):
+def torus_problem(
+    weights, n_points, bandwidth=None, *, backend="ducc0", threads=None, epsilon=DEFAULT_EPSILON, hessian="gauss-newton"
+):
     """The halftoning problem of ``weights`` (rows top to bottom) with ``n_points`` dots on T²."""
     weights = check_weights(weights)
     n_points = check_count(n_points)
@@ -102,14 +103,35 @@ def torus_problem(weights, n_points, bandwidth=None, *, backend="ducc0", threads
         n_points=n_points,
         bandwidth=bandwidth,
         sample=lambda rng, count: sample_image(weights, rng, count),
-        settings={"domain": "torus", "points": n_points, "bandwidth": bandwidth, "kernel": "ball",
-                  "hessian": hessian, "shape": list(weights.shape)},
+        settings={
+            "domain": "torus",
+            "points": n_points,
+            "bandwidth": bandwidth,
+            "kernel": "ball",
+            "hessian": hessian,
+            "shape": list(weights.shape),
+        },
     )
 
 
-def halftone_torus(weights, n_points, bandwidth=None, *, init="density", seed=0, tol=1e-4, iterations=2000,
-                   time_limit=None, backend="ducc0", threads=None, epsilon=DEFAULT_EPSILON,
-                   hessian="gauss-newton", restart_every=None, callback=None, state=None):
+def halftone_torus(
+    weights,
+    n_points,
+    bandwidth=None,
+    *,
+    init="density",
+    seed=0,
+    tol=1e-4,
+    iterations=2000,
+    time_limit=None,
+    backend="ducc0",
+    threads=None,
+    epsilon=DEFAULT_EPSILON,
+    hessian="gauss-newton",
+    restart_every=None,
+    callback=None,
+    state=None,
+):
     """Place ``n_points`` dots on the torus so that they reproduce the density ``weights``.
 
     Parameters
@@ -148,7 +170,17 @@ def halftone_torus(weights, n_points, bandwidth=None, *, init="density", seed=0,
         ``points`` of shape (M, 2) in unit coordinates [0, 1)² (x right, y down); multiply by
         ``(W, H)`` for pixel units.
     """
-    problem = torus_problem(weights, n_points, bandwidth, backend=backend, threads=threads,
-                            epsilon=epsilon, hessian=hessian)
-    return run(problem, init=init, seed=seed, tol=tol, iterations=iterations, time_limit=time_limit,
-               restart_every=restart_every, callback=callback, state=state)
+    problem = torus_problem(
+        weights, n_points, bandwidth, backend=backend, threads=threads, epsilon=epsilon, hessian=hessian
+    )
+    return run(
+        problem,
+        init=init,
+        seed=seed,
+        tol=tol,
+        iterations=iterations,
+        time_limit=time_limit,
+        restart_every=restart_every,
+        callback=callback,
+        state=state,
+    )

@@ -217,9 +217,7 @@ class SphereFourier:
         fields = []
         for alm in coeffs:
             self.counts["synthesis"] += 1
-            v_theta, v_phi = self._sht.synthesis_general(
-                alm=alm[None], spin=1, mode="DERIV1", **self._options()
-            )
+            v_theta, v_phi = self._sht.synthesis_general(alm=alm[None], spin=1, mode="DERIV1", **self._options())
             fields.append(v_theta[:, None] * e_theta + v_phi[:, None] * e_phi)
         return fields
 

@@ -7,7 +7,7 @@ from stipple.kernels import ball_kernel, distance_kernel
 
 @pytest.mark.parametrize("radius", [0.0, 0.4, 1.0, np.sqrt(2), 3.7, 25.0, 181.3, 460.0, 919.2])
 def test_ball_kernel_matches_hypergeometric_series(radius):
-    exact = float(mpmath.pi**2 / 160 * mpmath.hyp2f3(1.5, 2.5, 2, 3, 3.5, -mpmath.pi**2 * radius**2))
+    exact = float(mpmath.pi**2 / 160 * mpmath.hyp2f3(1.5, 2.5, 2, 3, 3.5, -(mpmath.pi**2) * radius**2))
     # Evaluate inside a larger array: the cumulative integration must not depend on neighbours.
     radii = np.concatenate([np.linspace(0, 50, 97), [radius]])
     assert ball_kernel(radii)[-1] == pytest.approx(exact, rel=5e-14)

@@ -82,8 +82,7 @@ def test_halftone_decreases_energy_monotonically_and_is_reproducible(rng):
 def test_backends_reach_the_same_energy():
     weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
     energies = [
-        halftone_torus(weights, 200, 30, iterations=15, tol=1e-12, threads=1, backend=backend,
-                       epsilon=1e-11).energies
+        halftone_torus(weights, 200, 30, iterations=15, tol=1e-12, threads=1, backend=backend, epsilon=1e-11).energies
         for backend in ("ducc0", "finufft")
     ]
     np.testing.assert_allclose(energies[0], energies[1], rtol=1e-6)

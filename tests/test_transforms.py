@@ -50,8 +50,11 @@ def test_packed_gradient_transforms_match_direct_formulas(rng):
     )
     np.testing.assert_allclose(fourier.gradient_synthesis([coeffs])[0], expected, atol=1e-10)
     vectors = rng.standard_normal((40, 2))
-    expected = np.einsum("mxy,mxy->xy", -2j * np.pi * (n1[None] * vectors[:, 0, None, None]
-                                                     + n2[None] * vectors[:, 1, None, None]), matrix)
+    expected = np.einsum(
+        "mxy,mxy->xy",
+        -2j * np.pi * (n1[None] * vectors[:, 0, None, None] + n2[None] * vectors[:, 1, None, None]),
+        matrix,
+    )
     np.testing.assert_allclose(fourier.gradient_analysis([vectors])[0], expected, atol=1e-10)
     second = np.einsum("xy,mxy->m", -4 * np.pi**2 * n1 * n2 * coeffs, matrix.conj()).real
     np.testing.assert_allclose(fourier.hessian_synthesis(coeffs)[:, 0, 1], second, atol=1e-9)
