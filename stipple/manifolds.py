@@ -21,7 +21,7 @@ class Torus:
         self._metric = self.scale**2
 
     def inner(self, points, u, v):
-        return float(np.sum((u * v) @ self._metric))
+        return float(np.sum(np.sum(u * v, axis=0) * self._metric))
 
     def norm(self, points, v):
         return np.sqrt(self.inner(points, v, v))

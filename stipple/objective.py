@@ -33,6 +33,7 @@ class Discrepancy:
         self.fourier = fourier
         self.kernel = kernel
         self.energy_weights = kernel * fourier.multiplicity
+        self._jacobian_weights = weight * kernel
         self.target = target
         self.weight = weight
         self.hessian = hessian
@@ -44,7 +45,8 @@ class Discrepancy:
         self._residual = self.weight * self.fourier.analysis() - self.target
 
     def energy(self):
-        return float(np.sum(self.energy_weights * np.abs(self._residual) ** 2))
+        residual = self._residual
+        return float(np.sum(self.energy_weights * (residual.real**2 + residual.imag**2)))
 
     def gradient(self):
         """``dE/dp_i = 2 lam Re sum_l k_l F_l grad psi_l(p_i)``."""
@@ -52,8 +54,9 @@ class Discrepancy:
 
     def hessian_vectors(self, vectors):
         """Hessian (Gauss-Newton ``2 J^H K J``, or full) applied to each field in ``vectors``."""
-        jacobians = self.fourier.gradient_analysis(vectors)
-        coeffs = [self.weight * self.kernel * jv for jv in jacobians]
+        coeffs = self.fourier.gradient_analysis(vectors)
+        for jacobian in coeffs:
+            jacobian *= self._jacobian_weights
         products = [2 * self.weight * hv for hv in self.fourier.gradient_synthesis(coeffs)]
         if self.hessian == "full":
             curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)

@@ -74,7 +74,7 @@ class FinufftNufft:
         self.epsilon = epsilon
         self.threads = threads
         self.counts = {"type1": 0, "type2": 0, "set_points": 0}
-        upsampfac = 1.25 if epsilon >= 3e-9 else 2.0
+        upsampfac = 1.25 if epsilon >= 1e-10 else 2.0
         self._plan = finufft.Plan(
             1, self.shape, eps=max(epsilon / 3, 1e-14), isign=-1, nthreads=threads, upsampfac=upsampfac
         )
@@ -119,6 +119,9 @@ class TorusFourier:
         self.nufft = nufft
         self.modes = torus_modes(nufft.shape)
         self.multiplicity = 1.0
+        n1, n2 = self.modes
+        self._synthesis_factor = 2j * np.pi * (n1 + 1j * n2)
+        self._analysis_factors = (-1j * np.pi * (n1 - 1j * n2), -1j * np.pi * (n1 + 1j * n2))
         self._ones = None
 
     def set_points(self, points):
@@ -131,18 +134,21 @@ class TorusFourier:
 
     def gradient_synthesis(self, coeffs):
         """Tangent fields ``Re sum_n a_n (2 pi i n) e^{2 pi i n.u_i}`` for a list of Hermitian arrays."""
-        n1, n2 = self.modes
-        packed = np.stack([(2j * np.pi) * (n1 + 1j * n2) * a for a in coeffs])
+        packed = np.empty((len(coeffs),) + self.nufft.shape, dtype=np.complex128)
+        for out, a in zip(packed, coeffs, strict=True):
+            np.multiply(self._synthesis_factor, a, out=out)
         values = self.nufft.type2(packed)
         return [np.stack([v.real, v.imag], axis=1) for v in values]
 
     def gradient_analysis(self, vectors):
         """``sum_i (-2 pi i n . v_i) e^{-2 pi i n.u_i}`` for a list of real ``(M, 2)`` fields."""
-        n1, n2 = self.modes
         packed = self.nufft.type1(np.stack([v[:, 0] + 1j * v[:, 1] for v in vectors]))
-        mirrored = np.conj(packed[:, ::-1, ::-1])
-        combined = 0.5 * ((n1 - 1j * n2) * packed + (n1 + 1j * n2) * mirrored)
-        return list((-2j * np.pi) * combined)
+        # T(v_x) = (T(z)_n + conj T(z)_-n) / 2 and T(v_y) = (T(z)_n - conj T(z)_-n) / 2i, z = v_x + i v_y.
+        mirrored = packed[:, ::-1, ::-1].conj()
+        mirrored *= self._analysis_factors[1]
+        packed *= self._analysis_factors[0]
+        packed += mirrored
+        return list(packed)
 
     def hessian_synthesis(self, coeffs):
         """Second derivatives ``Re sum_n a_n (-4 pi^2 n n^T) e^{2 pi i n.u_i}`` as an ``(M, 2, 2)`` array."""
