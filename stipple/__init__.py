@@ -3,7 +3,8 @@
 from .errors import StippleError
 from .halftone import HalftoneResult
 from .inputs import load_density
+from .sphere import halftone_sphere
 from .torus import halftone_torus
 
 __version__ = "0.1.0"
-__all__ = ["HalftoneResult", "StippleError", "halftone_torus", "load_density", "__version__"]
+__all__ = ["HalftoneResult", "StippleError", "halftone_sphere", "halftone_torus", "load_density", "__version__"]

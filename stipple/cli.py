@@ -14,7 +14,7 @@ from . import __version__
 from .errors import StippleError
 from .halftone import default_threads
 from .inputs import load_density
-from .outputs import check_writable, output_format, parse_length
+from .outputs import PROJECTIONS, check_writable, output_format, parse_length
 from .transforms import BACKENDS
 
 
@@ -232,3 +232,153 @@ def read_torus_init(init, shape):
     pixels = read_points_csv(init, ("x", "y"))
     rows, columns = shape
     return np.mod(pixels / np.array([columns, rows]), 1.0)
+
+
+@main.command()
+@click.argument("map_source", metavar="MAP", required=False)
+@run_options
+@click.option("--uniform", is_flag=True, help="w ≡ 1 (numerical spherical designs); no MAP.")
+@click.option(
+    "--lon0",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Longitude (degrees east) where the map's first column starts (-180 for maps centred on 0°).",
+)
+@click.option("--kernel", default="distance", show_default=True, help="'distance' (the paper's) or 'sobolev:S'.")
+@click.option(
+    "--init",
+    default="density",
+    show_default=True,
+    help="Start: 'density', 'uniform', or a CSV of lon,lat (degrees) or x,y,z.",
+)
+@click.option(
+    "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="CSV columns."
+)
+@click.option(
+    "--projection",
+    type=click.Choice(PROJECTIONS),
+    default="ortho",
+    show_default=True,
+    help="PNG view: orthographic globe or equirectangular map.",
+)
+@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees).")
+def sphere(
+    map_source,
+    n_points,
+    bandwidth,
+    iterations,
+    tol,
+    time_limit,
+    seed,
+    threads,
+    epsilon,
+    invert,
+    gamma,
+    value_range,
+    outputs,
+    width,
+    dot_radius,
+    png_width,
+    quiet,
+    uniform,
+    lon0,
+    kernel,
+    init,
+    coords,
+    projection,
+    view,
+):
+    """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
+    'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
+    from .outputs import sphere_output
+    from .sphere import DEFAULT_EPSILON, halftone_sphere, lon_lat
+
+    started = time.perf_counter()
+    try:
+        settings = render_settings(width, dot_radius, png_width)
+        view_angles = parse_view(view)
+        prepare_outputs(outputs)
+        density = load_sphere_density(
+            map_source, uniform, invert=invert, gamma=gamma, value_range=value_range, lon0=lon0
+        )
+        progress = Progress(iterations, quiet)
+        try:
+            result = halftone_sphere(
+                density,
+                n_points,
+                bandwidth,
+                kernel=kernel,
+                init=read_sphere_init(init),
+                seed=seed,
+                tol=tol,
+                iterations=iterations,
+                time_limit=time_limit,
+                threads=threads or default_threads(),
+                epsilon=epsilon or DEFAULT_EPSILON,
+                callback=progress,
+            )
+        finally:
+            progress.close()
+        degrees = lon_lat(result.points)
+        for path in outputs:
+            emit(
+                path,
+                sphere_output(
+                    result.points,
+                    degrees,
+                    output_format(path),
+                    coords=coords,
+                    projection=projection,
+                    view=view_angles,
+                    ink=density.mean,
+                    **settings,
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    report(result, quiet, started)
+
+
+def parse_view(text):
+    try:
+        lon, lat = (float(part) for part in text.split(","))
+    except ValueError:
+        raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
+    if not -90 <= lat <= 90:
+        raise StippleError(f"view latitude must be in [-90, 90], not {lat}")
+    return lon, lat
+
+
+def load_sphere_density(source, uniform, lon0, **options):
+    """The density object of MAP, a built-in name, or w ≡ 1."""
+    from .sphere import BUILTINS, CellMap
+
+    if uniform:
+        if source is not None:
+            raise StippleError("give either MAP or --uniform, not both")
+        return BUILTINS["uniform"]
+    if source is None:
+        raise StippleError("missing MAP (a .npy map, an image, builtin:NAME) or --uniform")
+    if source.startswith("builtin:"):
+        name = source.partition(":")[2]
+        if name not in BUILTINS:
+            raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
+        return BUILTINS[name]
+    return CellMap(load_input(source, **options), lon0)
+
+
+def read_sphere_init(init):
+    """``density``/``uniform``, or a CSV of ``lon,lat`` degrees or ``x,y,z`` as unit vectors."""
+    if init in ("density", "uniform"):
+        return init
+    from .inputs import read_points_csv
+    from .sphere import from_lon_lat
+
+    try:
+        longitude, latitude = read_points_csv(init, ("lon", "lat")).T
+        return from_lon_lat(longitude, latitude)
+    except StippleError as error:
+        if "expected CSV columns" not in str(error):
+            raise
+    return read_points_csv(init, ("x", "y", "z"))

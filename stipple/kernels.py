@@ -7,6 +7,8 @@ Both kernels are positive definite and band-limited by truncation: only the coef
 import numpy as np
 from scipy.special import j1, roots_legendre
 
+from .errors import StippleError
+
 _GAUSS_NODES, _GAUSS_WEIGHTS = roots_legendre(16)
 
 
@@ -60,3 +62,19 @@ def distance_kernel(degrees):
     n = np.asarray(degrees, dtype=float)
     values = 16 * np.pi / ((2 * n + 3) * (2 * n + 1) * (2 * n - 1))
     return np.where(n == 0, 0.0, values)
+
+
+def sphere_kernel(kernel, degrees):
+    """Kernel coefficients by degree: ``"distance"`` (the paper's restricted distance kernel) or
+    ``"sobolev:S"``, ``k_n = (1 + n(n+1))^-S`` (flatter: better conditioned, for numerical designs)."""
+    if kernel == "distance":
+        return distance_kernel(degrees)
+    name, _, exponent = str(kernel).partition(":")
+    try:
+        smoothness = float(exponent)
+    except ValueError:
+        smoothness = None
+    if name != "sobolev" or smoothness is None or not 0 <= smoothness <= 4:
+        raise StippleError(f"kernel must be 'distance' or 'sobolev:S' with 0 <= S <= 4, not {kernel!r}")
+    degrees = np.asarray(degrees, dtype=float)
+    return np.where(degrees == 0, 0.0, (1 + degrees * (degrees + 1)) ** -smoothness)

@@ -175,3 +175,84 @@ def torus_output(points, shape, fmt, *, width=(200.0, "mm"), dot_radius=None, pn
     if fmt == ".svg":
         return svg_bytes(pixels, (columns, rows), width, radius, comment=f"{len(points)} dots")
     return png_bytes(render_dots(pixels, (columns, rows), png_width or default_png_width(len(points)), radius))
+
+
+ORTHO_SIZE = 1000.0
+PROJECTIONS = ("ortho", "equirect")
+
+
+def orthographic(points, view):
+    """Canvas positions (``ORTHO_SIZE`` square, y down) and visibility of unit vectors seen from ``view``."""
+    lon, lat = np.radians(view)
+    centre = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
+    north = np.cross(centre, east)
+    half = ORTHO_SIZE / 2
+    xy = np.stack([half + 0.98 * half * (points @ east), half - 0.98 * half * (points @ north)], axis=1)
+    return xy, points @ centre > 0
+
+
+def equirectangular(longitude, latitude, width):
+    """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, lon -180 at the left."""
+    return np.stack([(longitude + 180) / 360 * width, (90 - latitude) / 180 * width / 2], axis=1)
+
+
+def sphere_output(
+    points,
+    lon_lat,
+    fmt,
+    *,
+    coords="lonlat",
+    projection="ortho",
+    view=(0.0, 0.0),
+    width=(200.0, "mm"),
+    dot_radius=None,
+    png_width=None,
+    ink=None,
+):
+    """Bytes of sphere ``points`` (unit vectors; ``lon_lat`` their degrees) in ``fmt``.
+
+    CSV is ``lon,lat`` in degrees or ``x,y,z``; GeoJSON a MultiPoint; SVG the orthographic front
+    hemisphere around ``view = (lon, lat)``; PNG that view or the equirectangular map. Discs have
+    ``dot_radius`` (physical) or by default the radius at which the dots' ink equals ``ink`` of the sphere.
+    """
+    longitude, latitude = lon_lat
+    if fmt == ".csv":
+        if coords == "xyz":
+            return csv_bytes(list(points.T), ["x", "y", "z"], digits=9)
+        return csv_bytes([longitude, latitude], ["lon", "lat"])
+    if fmt in (".geojson", ".json"):
+        return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
+    angular_radius = 2 * np.sqrt((0.5 if ink is None else ink) / len(points))
+    if projection == "equirect" and fmt == ".png":
+        canvas = (ORTHO_SIZE * 2, ORTHO_SIZE)
+        centres = equirectangular(longitude, latitude, canvas[0])
+        radius = angular_radius * canvas[0] / (2 * np.pi)
+    else:
+        canvas = (ORTHO_SIZE, ORTHO_SIZE)
+        centres, visible = orthographic(points, view)
+        centres = centres[visible]
+        radius = angular_radius * 0.98 * ORTHO_SIZE / 2
+    if dot_radius is not None:
+        radius = to_user_units(dot_radius, width, canvas[0])
+    if fmt == ".svg":
+        return svg_bytes(centres, canvas, width, radius, comment=f"{len(centres)} of {len(points)} dots, front")
+    return png_bytes(
+        render_dots(
+            centres,
+            canvas,
+            png_width or default_png_width(len(points)),
+            radius,
+            background=_globe_background(canvas) if projection == "ortho" else None,
+        )
+    )
+
+
+def _globe_background(canvas):
+    """A light disc marking the globe's outline."""
+    image = Image.new("L", (int(canvas[0]), int(canvas[1])), 255)
+    half = ORTHO_SIZE / 2
+    ImageDraw.Draw(image).ellipse(
+        (half * 0.02, half * 0.02, ORTHO_SIZE - half * 0.02, ORTHO_SIZE - half * 0.02), fill=235
+    )
+    return image

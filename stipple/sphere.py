@@ -1,0 +1,287 @@
+"""Halftoning on the sphere: exact coefficients of cell maps and analytic densities, the distance kernel."""
+
+import numpy as np
+from scipy.special import roots_legendre
+
+from .errors import StippleError
+from .halftone import MAX_BANDWIDTH, Problem, check_count, default_threads, run
+from .inputs import check_grid
+from .kernels import sphere_kernel
+from .manifolds import Sphere
+from .objective import Discrepancy
+from .torus import cell_factor
+from .transforms import SphereFourier, alm_degrees_orders, spherical_angles
+
+DEFAULT_EPSILON = 1e-10
+
+
+def default_bandwidth(n_points):
+    """The paper's ratio for Fig. 5.3 (M = 200000, N = 1000): ``N ≈ 2.24 sqrt(M)``."""
+    return int(np.ceil(2.236 * np.sqrt(n_points)))
+
+
+def check_degree(bandwidth):
+    valid = isinstance(bandwidth, (int, np.integer)) and not isinstance(bandwidth, bool)
+    if not valid or not 1 <= bandwidth <= MAX_BANDWIDTH:
+        raise StippleError(f"bandwidth (degree) must be an integer in [1, {MAX_BANDWIDTH}], not {bandwidth!r}")
+    return int(bandwidth)
+
+
+class CellMap:
+    """A density constant on the cells of an equirectangular map.
+
+    Row 0 is the band next to the north pole (``theta in [0, pi/H]``); column ``j`` covers longitudes
+    ``[lon0 + 360 j / W, lon0 + 360 (j+1) / W)`` degrees east.
+    """
+
+    def __init__(self, values, lon0=0.0):
+        self.values = check_grid(np.asarray(values, dtype=np.float64), "map")
+        if np.any(self.values < 0):
+            raise StippleError("map: density must be non-negative")
+        self.lon0 = float(lon0)
+        rows, columns = self.values.shape
+        edges = np.cos(np.linspace(0, np.pi, rows + 1))
+        self.cell_areas = np.outer(edges[:-1] - edges[1:], np.full(columns, 2 * np.pi / columns))
+        if not np.sum(self.values * self.cell_areas) > 0:
+            raise StippleError("map: density is zero everywhere; there is nothing to place dots on")
+
+    @property
+    def mean(self):
+        """Area-weighted mean of the density (its mass over 4 pi)."""
+        return float(np.sum(self.values * self.cell_areas) / (4 * np.pi))
+
+    def coefficients(self, lmax, threads=1):
+        """Exact ``w_nm = int w conj(Y_nm)`` of the cell-constant map, ``0 <= m <= n <= lmax``.
+
+        Exact in longitude (row FFT times the cell factor); in colatitude each band is integrated by
+        Gauss-Legendre in theta with enough nodes for the trigonometric polynomial ``Y_nm sin(theta)``,
+        then ``ducc0.sht.leg2alm`` sums the Legendre functions over all nodes.
+        """
+        import ducc0
+
+        rows, columns = self.values.shape
+        orders = np.arange(lmax + 1)
+        row_spectra = np.fft.fft(self.values, axis=1)[:, orders % columns]
+        phase = np.exp(-1j * orders * np.radians(self.lon0)) * cell_factor(orders, columns) * 2 * np.pi / columns
+        nodes_per_band = int(np.ceil((lmax + 2) * np.pi / rows / 2)) + 10
+        nodes, weights = roots_legendre(nodes_per_band)
+        half = np.pi / rows / 2
+        theta = (np.arange(rows)[:, None] * 2 + 1) * half + half * nodes[None, :]
+        ring_weights = half * weights[None, :] * np.sin(theta)
+        leg = (ring_weights[:, :, None] * (row_spectra * phase)[:, None, :]).reshape(1, -1, lmax + 1)
+        return ducc0.sht.leg2alm(leg=leg, lmax=lmax, theta=theta.ravel(), spin=0, nthreads=threads)[0]
+
+    def sample(self, rng, count):
+        """I.i.d. points from the cell-constant density: a cell by its mass, then uniform in area."""
+        rows, columns = self.values.shape
+        mass = np.cumsum((self.values * self.cell_areas).ravel())
+        cells = np.minimum(np.searchsorted(mass, rng.random(count) * mass[-1], side="right"), mass.size - 1)
+        row, column = np.divmod(cells, columns)
+        top, bottom = np.cos(row * np.pi / rows), np.cos((row + 1) * np.pi / rows)
+        z = bottom + (top - bottom) * rng.random(count)
+        phi = np.radians(self.lon0) + 2 * np.pi * (column + rng.random(count)) / columns
+        return unit_vectors(z, phi)
+
+
+class AnalyticDensity:
+    """A smooth density given as a function of unit vectors ``(M, 3) -> (M,)``."""
+
+    def __init__(self, function, name="density"):
+        self.function = function
+        self.name = name
+
+    def _grid(self, lmax):
+        """Gauss-Legendre rings and equispaced longitudes, exact for degree ``2 * lmax``."""
+        rings = 2 * lmax + 2
+        theta = np.arccos(-roots_legendre(rings)[0])
+        phi = 2 * np.pi * np.arange(2 * rings) / (2 * rings)
+        points = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
+        return theta, phi, self.function(points.reshape(-1, 3)).reshape(len(theta), len(phi))
+
+    @property
+    def mean(self):
+        return float(self._cell_map().mean)
+
+    def coefficients(self, lmax, threads=1):
+        """``w_nm`` by Gauss-Legendre quadrature on a grid of degree ``2 lmax`` (at least 512)."""
+        import ducc0
+
+        theta, phi, values = self._grid(max(lmax, 256))
+        if not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise StippleError(f"{self.name}: density must be finite and non-negative")
+        weighted = values * _gauss_weights(len(theta))[:, None] * 2 * np.pi / len(phi)
+        return ducc0.sht.adjoint_synthesis_2d(map=weighted[None], lmax=lmax, spin=0, geometry="GL", nthreads=threads)[0]
+
+    def _cell_map(self):
+        rows = 360
+        latitudes = (np.arange(rows) + 0.5) * np.pi / rows
+        longitudes = (np.arange(2 * rows) + 0.5) * np.pi / rows
+        z, phi = np.cos(latitudes)[:, None] + 0 * longitudes, longitudes[None, :] + 0 * latitudes[:, None]
+        return CellMap(self.function(unit_vectors(z.ravel(), phi.ravel())).reshape(rows, 2 * rows))
+
+    def sample(self, rng, count):
+        """Approximately i.i.d. from the density (its values on a 0.5° grid), good for a start."""
+        return self._cell_map().sample(rng, count)
+
+
+def _gauss_weights(rings):
+    return roots_legendre(rings)[1]
+
+
+class UniformDensity(AnalyticDensity):
+    """``w ≡ 1``: numerical spherical designs."""
+
+    def __init__(self):
+        super().__init__(lambda points: np.ones(len(points)), "uniform")
+
+    @property
+    def mean(self):
+        return 1.0
+
+    def coefficients(self, lmax, threads=1):
+        coeffs = np.zeros((lmax + 1) * (lmax + 2) // 2, dtype=np.complex128)
+        coeffs[0] = np.sqrt(4 * np.pi)
+        return coeffs
+
+    def sample(self, rng, count):
+        return Sphere().random(rng, count)
+
+
+def unit_vectors(z, phi):
+    """Unit vectors from height ``z = cos(theta)`` and longitude ``phi`` (radians)."""
+    radius = np.sqrt(np.clip(1 - z**2, 0, None))
+    return np.stack([radius * np.cos(phi), radius * np.sin(phi), z], axis=-1)
+
+
+def lon_lat(points):
+    """Longitude in (-180, 180] and latitude in [-90, 90], degrees, of unit vectors."""
+    theta, phi = spherical_angles(points)
+    longitude = np.degrees(phi)
+    return np.where(longitude > 180, longitude - 360, longitude), 90 - np.degrees(theta)
+
+
+def from_lon_lat(longitude, latitude):
+    return unit_vectors(np.sin(np.radians(latitude)), np.radians(longitude))
+
+
+def as_density(weights, lon0=0.0):
+    """A density object from a map array, a callable on unit vectors, a density object, or None (uniform)."""
+    if weights is None:
+        return UniformDensity()
+    if hasattr(weights, "coefficients"):
+        return weights
+    if callable(weights):
+        return AnalyticDensity(weights)
+    return CellMap(weights, lon0)
+
+
+def sphere_problem(
+    weights, n_points, bandwidth=None, *, lon0=0.0, kernel="distance", threads=None, epsilon=DEFAULT_EPSILON
+):
+    """The halftoning problem of ``weights`` (see ``halftone_sphere``) with ``n_points`` dots on S²."""
+    density = as_density(weights, lon0)
+    n_points = check_count(n_points)
+    bandwidth = check_degree(default_bandwidth(n_points) if bandwidth is None else bandwidth)
+    threads = default_threads() if threads is None else threads
+    target = density.coefficients(bandwidth, threads)
+    degrees, _ = alm_degrees_orders(bandwidth)
+    kernel_coeffs = sphere_kernel(kernel, degrees)
+    fourier = SphereFourier(bandwidth, epsilon, threads)
+    mass = target[0].real * np.sqrt(4 * np.pi)
+    objective = Discrepancy(fourier, kernel_coeffs, target, weight=mass / n_points)
+    return Problem(
+        domain="sphere",
+        manifold=Sphere(),
+        objective=objective,
+        n_points=n_points,
+        bandwidth=bandwidth,
+        sample=density.sample,
+        settings={
+            "domain": "sphere",
+            "points": n_points,
+            "bandwidth": bandwidth,
+            "kernel": kernel,
+            "hessian": "gauss-newton",
+        },
+    )
+
+
+def halftone_sphere(
+    weights,
+    n_points,
+    bandwidth=None,
+    *,
+    lon0=0.0,
+    kernel="distance",
+    init="density",
+    seed=0,
+    tol=1e-4,
+    iterations=2000,
+    time_limit=None,
+    threads=None,
+    epsilon=DEFAULT_EPSILON,
+    restart_every=None,
+    callback=None,
+    state=None,
+):
+    """Place ``n_points`` dots on the unit sphere so that they reproduce a density.
+
+    Parameters
+    ----------
+    weights : array_like (H, W), callable, or None
+        An equirectangular map of ``w >= 0`` (row 0 at the north pole, column 0 starting at ``lon0``
+        degrees east), a function of unit vectors ``(M, 3) -> (M,)``, or None for ``w ≡ 1``
+        (numerical spherical designs).
+    n_points : int
+        Number of dots M.
+    bandwidth : int, optional
+        Polynomial degree N of the kernel (default ``default_bandwidth(M)``).
+    lon0 : float
+        Longitude (degrees east) where the map's first column starts.
+    kernel : str
+        ``"distance"`` (default, the paper's) or ``"sobolev:S"`` (see ``sphere_kernel``).
+    init : {"density", "uniform"} or array (M, 3)
+        Starting points (given points are normalised onto the sphere).
+    seed, tol, iterations, time_limit, threads, epsilon, restart_every, callback, state :
+        As for ``halftone_torus``.
+
+    Returns
+    -------
+    HalftoneResult
+        ``points`` as unit vectors of shape (M, 3); ``stipple.sphere.lon_lat`` converts them.
+    """
+    problem = sphere_problem(weights, n_points, bandwidth, lon0=lon0, kernel=kernel, threads=threads, epsilon=epsilon)
+    if not isinstance(init, str):
+        init = np.asarray(init, dtype=np.float64)
+        init = init / np.linalg.norm(init, axis=-1, keepdims=True)
+    return run(
+        problem,
+        init=init,
+        seed=seed,
+        tol=tol,
+        iterations=iterations,
+        time_limit=time_limit,
+        restart_every=restart_every,
+        callback=callback,
+        state=state,
+    )
+
+
+def three_gaussians(points):
+    """Paper Fig. 5.4: ``sum_i exp(-5 arccos(x . q_i)^2)`` with ``q_i`` the coordinate axes."""
+    return np.sum(np.exp(-5 * np.arccos(np.clip(points, -1, 1)) ** 2), axis=1)
+
+
+def rbf_node_density(points):
+    """Paper Fig. 5.5, eq. (5.2): ``sqrt(3) sech^2(3s) tanh(3s) / (2s)``, ``s = sin(theta)``; 3 sqrt(3)/2 at poles."""
+    s = np.sqrt(np.clip(1 - points[:, 2] ** 2, 0, None))
+    safe = np.where(s > 0, s, 1.0)
+    value = np.sqrt(3) * np.tanh(3 * safe) / np.cosh(3 * safe) ** 2 / (2 * safe)
+    return np.where(s > 0, value, 1.5 * np.sqrt(3))
+
+
+BUILTINS = {
+    "gaussians": AnalyticDensity(three_gaussians, "builtin:gaussians"),
+    "rbf": AnalyticDensity(rbf_node_density, "builtin:rbf"),
+    "uniform": UniformDensity(),
+}

@@ -1,0 +1,110 @@
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+
+
+def run(args, **kwargs):
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+
+
+@pytest.fixture
+def map_path(tmp_path):
+    latitude = np.linspace(90, -90, 18)[:, None] + np.zeros(36)
+    path = tmp_path / "north.npy"
+    np.save(path, latitude)  # high values (many dots) in the north
+    return path
+
+
+def test_sphere_outputs(map_path, tmp_path):
+    names = ["dots.csv", "dots.geojson", "dots.svg", "globe.png"]
+    outputs = [item for name in names for item in ("-o", tmp_path / name)]
+    result = run(["sphere", map_path, "-M", 200, "-N", 16, "--iterations", 5, "-q"] + outputs)
+    assert result.exit_code == 0, result.output
+    table = np.loadtxt(tmp_path / "dots.csv", delimiter=",", skiprows=1)
+    assert (tmp_path / "dots.csv").read_text().startswith("lon,lat\n") and table.shape == (200, 2)
+    assert np.all(np.abs(table[:, 0]) <= 180) and np.all(np.abs(table[:, 1]) <= 90)
+    assert np.sum(table[:, 1] > 0) > 2 * np.sum(table[:, 1] < 0)
+    geojson = json.loads((tmp_path / "dots.geojson").read_text())
+    coordinates = geojson["features"][0]["geometry"]["coordinates"]
+    np.testing.assert_allclose(coordinates, table, atol=1e-6)
+    assert 0 < (tmp_path / "dots.svg").read_text().count("<circle") < 200
+    assert Image.open(tmp_path / "globe.png").size == (1024, 1024)
+
+
+def test_xyz_coordinates_and_equirect(map_path, tmp_path):
+    result = run(
+        [
+            "sphere",
+            map_path,
+            "-M",
+            50,
+            "-N",
+            8,
+            "--iterations",
+            2,
+            "-q",
+            "--coords",
+            "xyz",
+            "-o",
+            "-",
+            "-o",
+            tmp_path / "map.png",
+            "--projection",
+            "equirect",
+        ]
+    )
+    assert result.exit_code == 0, result.output
+    table = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")
+    np.testing.assert_allclose(np.linalg.norm(table, axis=1), 1, atol=1e-8)
+    assert Image.open(tmp_path / "map.png").size == (1024, 512)
+
+
+def test_uniform_and_builtins():
+    result = run(["sphere", "--uniform", "-M", 30, "-N", 4, "--iterations", 3, "-q"])
+    assert result.exit_code == 0 and len(result.stdout.splitlines()) == 31
+    result = run(["sphere", "builtin:gaussians", "-M", 30, "-N", 6, "--iterations", 3, "-q"])
+    assert result.exit_code == 0
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["sphere", "-M", 10], "missing MAP"),
+        (["sphere", "builtin:nope"], "unknown built-in density"),
+        (["sphere", "--uniform", "--kernel", "gauss"], "kernel must be"),
+        (["sphere", "--uniform", "--view", "10"], "view must be LON,LAT"),
+        (["sphere", "--uniform", "-N", 0], "bandwidth (degree) must be an integer"),
+    ],
+)
+def test_sphere_bad_options(args, message):
+    result = run(args + ["-q"])
+    assert result.exit_code == 1
+    assert message in result.output
+
+
+def test_map_and_uniform_together_is_an_error(map_path):
+    result = run(["sphere", map_path, "--uniform"])
+    assert result.exit_code == 1 and "either MAP or --uniform" in result.output
+
+
+def test_lon0_shifts_the_map(tmp_path):
+    values = np.zeros((6, 12))
+    values[:, 0] = 1.0  # first column only: [lon0, lon0 + 30°)
+    np.save(tmp_path / "band.npy", values)
+    result = run(["sphere", tmp_path / "band.npy", "-M", 100, "-N", 6, "--iterations", 0, "-q", "--lon0", "-180"])
+    longitude = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")[:, 0]
+    assert np.all((longitude >= 150) | (longitude <= -150))
+
+
+def test_image_map_uses_dark_as_dense(tmp_path):
+    picture = np.full((10, 20), 255, dtype=np.uint8)
+    picture[:5] = 0
+    Image.fromarray(picture).save(tmp_path / "dark-north.png")
+    result = run(["sphere", tmp_path / "dark-north.png", "-M", 100, "-N", 6, "--iterations", 0, "-q"])
+    latitude = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")[:, 1]
+    assert np.all(latitude >= 0)

@@ -1,0 +1,232 @@
+import numpy as np
+import pytest
+import scipy.special as sp
+from conftest import taylor_slope
+from scipy.special import roots_legendre
+
+from stipple.manifolds import Sphere
+from stipple.sphere import (
+    AnalyticDensity,
+    CellMap,
+    halftone_sphere,
+    lon_lat,
+    rbf_node_density,
+    sphere_problem,
+    three_gaussians,
+)
+from stipple.transforms import SphereFourier, alm_degrees_orders, spherical_angles, spherical_frame
+
+
+def sph_harm(n, m, points):
+    theta, phi = spherical_angles(points)
+    return sp.sph_harm_y(n[:, None], m[:, None], theta[None], phi[None])
+
+
+def random_points(rng, count):
+    return Sphere().random(rng, count)
+
+
+def test_analysis_matches_scipy_direct_sum(rng):
+    lmax = 9
+    points = random_points(rng, 30)
+    fourier = SphereFourier(lmax, 1e-13, 1)
+    fourier.set_points(points)
+    n, m = alm_degrees_orders(lmax)
+    np.testing.assert_allclose(fourier.analysis(), np.conj(sph_harm(n, m, points)).sum(axis=1), atol=1e-11)
+
+
+def test_gradient_synthesis_matches_finite_differences_of_scipy(rng):
+    lmax = 7
+    points = random_points(rng, 12)
+    fourier = SphereFourier(lmax, 1e-13, 1)
+    fourier.set_points(points)
+    n, m = alm_degrees_orders(lmax)
+    coeffs = rng.standard_normal(n.size) + 1j * rng.standard_normal(n.size)
+    coeffs[m == 0] = coeffs[m == 0].real
+    multiplicity = np.where(m == 0, 1, 2)
+
+    def field(x):
+        return np.real(np.sum(multiplicity[:, None] * coeffs[:, None] * sph_harm(n, m, x), axis=0))
+
+    theta, phi = spherical_angles(points)
+    e_theta, e_phi = spherical_frame(theta, phi)
+    h = 1e-6
+    gradient = fourier.gradient_synthesis([coeffs])[0]
+    for direction in (e_theta, e_phi):
+        plus = Sphere().retract(points, h * direction)
+        minus = Sphere().retract(points, -h * direction)
+        derivative = (field(plus) - field(minus)) / (2 * h)
+        np.testing.assert_allclose(np.sum(gradient * direction, axis=1), derivative, atol=1e-7)
+    np.testing.assert_allclose(np.sum(gradient * points, axis=1), 0, atol=1e-14)
+
+
+def test_gradient_analysis_is_adjoint_of_synthesis(rng):
+    lmax = 11
+    points = random_points(rng, 25)
+    fourier = SphereFourier(lmax, 1e-13, 1)
+    fourier.set_points(points)
+    vectors = Sphere().project(points, rng.standard_normal(points.shape))
+    coeffs = fourier.analysis()
+    left = np.sum(vectors * fourier.gradient_synthesis([coeffs])[0])
+    right = np.real(np.sum(fourier.multiplicity * np.conj(coeffs) * fourier.gradient_analysis([vectors])[0]))
+    assert left == pytest.approx(right, rel=1e-10)
+
+
+def small_problem(rng, **kwargs):
+    problem = sphere_problem(rng.random((6, 12)), 40, 12, threads=1, epsilon=1e-13, **kwargs)
+    return problem, problem.sample(rng, 40)
+
+
+def test_gradient_along_geodesics_taylor_slope_two(rng):
+    problem, points = small_problem(rng)
+    objective, manifold = problem.objective, problem.manifold
+    objective.set_points(points)
+    energy, gradient = objective.energy(), manifold.riesz(points, objective.gradient())
+    direction = manifold.project(points, rng.standard_normal(points.shape))
+
+    def remainder(t):
+        objective.set_points(manifold.retract(points, t * direction))
+        return objective.energy() - energy - t * manifold.inner(points, gradient, direction)
+
+    assert taylor_slope(remainder, np.logspace(-2.5, -4, 6)) == pytest.approx(2, abs=0.1)
+
+
+def test_gauss_newton_matches_finite_difference_jacobian(rng):
+    problem, points = small_problem(rng)
+    objective, manifold = problem.objective, problem.manifold
+    direction = manifold.project(points, rng.standard_normal(points.shape))
+    objective.set_points(points)
+    residual = objective._residual.copy()
+    (hess_direction,) = objective.hessian_vectors([direction])
+    t = 1e-6
+    objective.set_points(manifold.retract(points, t * direction))
+    jacobian_direction = (objective._residual - residual) / t
+    quadratic = 2 * np.sum(objective.energy_weights * np.abs(jacobian_direction) ** 2)
+    assert manifold.inner(points, direction, hess_direction) == pytest.approx(quadratic, rel=1e-5)
+
+
+def test_exp_and_transport_properties(rng):
+    sphere = Sphere()
+    points = random_points(rng, 50)
+    points[0] = [0, 0, 1]
+    points[1] = [0, 0, -1]
+    v = sphere.project(points, rng.standard_normal(points.shape))
+    v *= 3.0 / np.linalg.norm(v, axis=1).max()
+    w = sphere.project(points, rng.standard_normal(points.shape))
+    moved = sphere.retract(points, v)
+    np.testing.assert_allclose(np.linalg.norm(moved, axis=1), 1, atol=1e-15)
+    # Geodesic distance equals |v| (for |v| < pi).
+    angles = np.arctan2(np.linalg.norm(np.cross(points, moved), axis=1), np.sum(points * moved, axis=1))
+    np.testing.assert_allclose(angles, np.linalg.norm(v, axis=1), atol=1e-13)
+    carried = sphere.transport(points, v, w)
+    np.testing.assert_allclose(np.sum(carried * moved, axis=1), 0, atol=1e-13)
+    np.testing.assert_allclose(np.linalg.norm(carried, axis=1), np.linalg.norm(w, axis=1), rtol=1e-12)
+    # Transport is an isometry: inner products between transported vectors are kept.
+    np.testing.assert_allclose(
+        np.sum(sphere.transport(points, v, v) * carried, axis=1), np.sum(v * w, axis=1), atol=1e-12
+    )
+    np.testing.assert_allclose(sphere.transport(points, 0 * v, w), w, atol=1e-15)
+
+
+def test_points_exactly_at_the_poles(rng):
+    problem, points = small_problem(rng)
+    points[:2] = [[0, 0, 1], [0, 0, -1]]
+    objective, manifold = problem.objective, problem.manifold
+    objective.set_points(points)
+    gradient = manifold.riesz(points, objective.gradient())
+    assert np.all(np.isfinite(gradient))
+    np.testing.assert_allclose(gradient[:2, 2], 0, atol=1e-15)
+    direction = manifold.project(points, rng.standard_normal(points.shape))
+    energies = []
+    for t in (1e-4, -1e-4):
+        objective.set_points(manifold.retract(points, t * direction))
+        energies.append(objective.energy())
+    slope = (energies[0] - energies[1]) / 2e-4
+    assert slope == pytest.approx(manifold.inner(points, gradient, direction), rel=1e-6)
+
+
+OCTAHEDRON = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+_golden = (1 + np.sqrt(5)) / 2
+ICOSAHEDRON = np.array(
+    [[0, s1, s2 * _golden] for s1 in (-1, 1) for s2 in (-1, 1)]
+    + [[s1, s2 * _golden, 0] for s1 in (-1, 1) for s2 in (-1, 1)]
+    + [[s2 * _golden, 0, s1] for s1 in (-1, 1) for s2 in (-1, 1)]
+)
+ICOSAHEDRON /= np.linalg.norm(ICOSAHEDRON, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("points,strength", [(OCTAHEDRON, 3), (ICOSAHEDRON, 5)])
+def test_platonic_designs_have_zero_error_up_to_their_strength(points, strength):
+    exact = sphere_problem(None, len(points), strength, threads=1, epsilon=1e-13).objective
+    exact.set_points(points)
+    beyond = sphere_problem(None, len(points), strength + 1, threads=1, epsilon=1e-13).objective
+    beyond.set_points(points)
+    assert exact.energy() < 1e-24
+    assert beyond.energy() > 1e-4
+
+
+def brute_force_cell_coefficients(values, lmax, lon0):
+    rows, columns = values.shape
+    n, m = alm_degrees_orders(lmax)
+    x, g = roots_legendre(30)
+    total = np.zeros(n.size, dtype=complex)
+    for r in range(rows):
+        theta = (r + 0.5 + 0.5 * x) * np.pi / rows
+        for c in range(columns):
+            phi = np.radians(lon0) + (c + 0.5 + 0.5 * x) * 2 * np.pi / columns
+            t, p = np.meshgrid(theta, phi, indexing="ij")
+            harmonics = sp.sph_harm_y(n[:, None, None], m[:, None, None], t[None], p[None])
+            weights = np.outer(g * np.pi / rows / 2 * np.sin(theta), g * np.pi / columns)
+            total += values[r, c] * np.einsum("kij,ij->k", np.conj(harmonics), weights)
+    return total
+
+
+def test_cell_map_coefficients_are_exact(rng):
+    values = rng.random((4, 6))
+    np.testing.assert_allclose(
+        CellMap(values, lon0=-30).coefficients(12), brute_force_cell_coefficients(values, 12, -30), atol=1e-13
+    )
+
+
+def test_constant_map_has_only_the_mean():
+    coeffs = CellMap(np.full((9, 20), 2.0)).coefficients(40)
+    assert coeffs[0] == pytest.approx(2 * np.sqrt(4 * np.pi))
+    assert np.abs(coeffs[1:]).max() < 1e-13
+
+
+def test_analytic_density_coefficients_of_a_harmonic():
+    def field(points):
+        theta, phi = spherical_angles(points)
+        return 1.5 + np.real(sp.sph_harm_y(3, 2, theta, phi))
+
+    coeffs = AnalyticDensity(field).coefficients(8)
+    n, m = alm_degrees_orders(8)
+    expected = np.zeros(n.size, dtype=complex)
+    expected[0] = 1.5 * np.sqrt(4 * np.pi)
+    expected[(n == 3) & (m == 2)] = 0.5
+    np.testing.assert_allclose(coeffs, expected, atol=1e-11)
+
+
+def test_builtin_densities():
+    poles = np.array([[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0]])
+    np.testing.assert_allclose(rbf_node_density(poles)[:2], 1.5 * np.sqrt(3))
+    near_pole = np.array([[np.sin(1e-6), 0, np.cos(1e-6)]])
+    assert rbf_node_density(near_pole)[0] == pytest.approx(1.5 * np.sqrt(3), rel=1e-9)
+    assert three_gaussians(np.eye(3))[0] == pytest.approx(1 + 2 * np.exp(-5 * (np.pi / 2) ** 2))
+
+
+def test_samples_follow_a_cell_map(rng):
+    values = np.zeros((4, 8))
+    values[0, 2] = 1.0  # north of 45°N, longitudes 90°..135°
+    points = CellMap(values).sample(rng, 500)
+    longitude, latitude = lon_lat(points)
+    assert np.all((latitude >= 45) & (longitude >= 90) & (longitude <= 135))
+
+
+def test_halftone_sphere_descends_and_is_reproducible():
+    first = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5)
+    second = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5)
+    np.testing.assert_array_equal(first.points, second.points)
+    assert np.max(np.diff(first.energies) / first.energies[:-1]) < 1e-12
+    assert first.energies[-1] < 0.1 * first.energies[0]
+    np.testing.assert_allclose(np.linalg.norm(first.points, axis=1), 1, atol=1e-14)
