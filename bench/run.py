@@ -16,9 +16,12 @@ import numpy as np
 
 from stipple.halftone import default_threads, run
 from stipple.inputs import load_density
+from stipple.sphere import CellMap, sphere_problem
 from stipple.torus import torus_problem
+from stipple.transforms import alm_size, spherical_angles
 
 TORUS_CASES = [(30150, 650), (200000, 1300)]
+SPHERE_CASES = [(200000, 1000)]
 
 
 def median_iteration_seconds(problem, iterations):
@@ -42,37 +45,66 @@ def transform_counts(problem):
 
 
 def raw_torus_seconds(problem, points, repeats):
-    """One iteration's transforms called directly: set points, 1+2 type-1 and 1+2 type-2 (batched as in CG)."""
+    """One iteration's NUFFTs called directly: set points, type 1 of 1 + 2 arrays, type 2 of 1 array."""
     nufft = problem.objective.fourier.nufft
-    values = np.ones((1, len(points)), dtype=np.complex128)
+    single = np.ones((1, len(points)), dtype=np.complex128)
     pair = np.ones((2, len(points)), dtype=np.complex128)
     grid = np.ones((1,) + nufft.shape, dtype=np.complex128)
-    grids = np.ones((2,) + nufft.shape, dtype=np.complex128)
+
+    def transforms():
+        nufft.set_points(points)
+        nufft.type1(single)
+        nufft.type2(grid)
+        nufft.type1(pair)
+
+    return median_seconds(transforms, repeats)
+
+
+def raw_sphere_seconds(problem, points, repeats):
+    """One iteration's SHTs called directly: adjoint spin 0, synthesis spin 1, two adjoints spin 1."""
+    import ducc0
+
+    fourier = problem.objective.fourier
+    theta, phi = spherical_angles(points)
+    options = dict(
+        lmax=fourier.lmax, loc=np.stack([theta, phi], axis=1), epsilon=fourier.epsilon, nthreads=fourier.threads
+    )
+    alm = np.ones((1, alm_size(fourier.lmax)), dtype=np.complex128)
+    ones = np.ones((1, len(points)))
+    pair = np.ones((2, len(points)))
+
+    def transforms():
+        ducc0.sht.adjoint_synthesis_general(map=ones, spin=0, **options)
+        ducc0.sht.synthesis_general(alm=alm, spin=1, mode="DERIV1", **options)
+        for _ in range(2):
+            ducc0.sht.adjoint_synthesis_general(map=pair, spin=1, mode="DERIV1", **options)
+
+    return median_seconds(transforms, repeats)
+
+
+def median_seconds(function, repeats):
     timings = []
     for _ in range(repeats):
         started = time.perf_counter()
-        nufft.set_points(points)
-        nufft.type1(values)
-        nufft.type2(grid)
-        nufft.type1(pair)
-        nufft.type2(grids)
+        function()
         timings.append(time.perf_counter() - started)
     return float(np.median(timings))
 
 
-def torus_case(weights, n_points, bandwidth, backend, threads, iterations):
-    problem = torus_problem(weights, n_points, bandwidth, backend=backend, threads=threads)
-    points = problem.sample(np.random.default_rng(0), n_points)
+def case(problem, raw_seconds, name, backend, threads, iterations):
+    points = problem.sample(np.random.default_rng(0), problem.n_points)
     seconds, counts = median_iteration_seconds(problem, iterations)
-    raw = raw_torus_seconds(problem, points, max(5, iterations // 2))
+    raw = raw_seconds(problem, points, max(5, iterations // 2))
     return {
-        "domain": "torus",
-        "input": "samples/astronaut256.png",
-        "M": n_points,
-        "N": bandwidth,
+        "domain": problem.domain,
+        "input": name,
+        "M": problem.n_points,
+        "N": problem.bandwidth,
         "backend": backend,
         "threads": threads,
-        "epsilon": problem.objective.fourier.nufft.epsilon,
+        "epsilon": problem.objective.fourier.epsilon
+        if backend == "ducc0.sht"
+        else problem.objective.fourier.nufft.epsilon,
         "iterations_timed": iterations,
         "seconds_per_iteration": seconds,
         "raw_transform_seconds_per_iteration": raw,
@@ -93,14 +125,22 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, default=default_threads())
     parser.add_argument("--quick", action="store_true", help="small cases only (smoke test)")
     args = parser.parse_args(argv)
-    weights = load_density("samples/astronaut256.png")
-    cases = [(2000, 128)] if args.quick else TORUS_CASES
+    portrait = load_density("samples/astronaut256.png")
+    topography = CellMap(load_density("samples/topo.npy"))
     results = []
-    for n_points, bandwidth in cases:
+    for n_points, bandwidth in [(2000, 128)] if args.quick else TORUS_CASES:
         for backend in ("ducc0", "finufft"):
-            result = torus_case(weights, n_points, bandwidth, backend, args.threads, args.iterations)
-            print(json.dumps(result), file=sys.stderr)
-            results.append(result)
+            problem = torus_problem(portrait, n_points, bandwidth, backend=backend, threads=args.threads)
+            results.append(
+                case(problem, raw_torus_seconds, "samples/astronaut256.png", backend, args.threads, args.iterations)
+            )
+            print(json.dumps(results[-1]), file=sys.stderr)
+    for n_points, bandwidth in [(2000, 64)] if args.quick else SPHERE_CASES:
+        problem = sphere_problem(topography, n_points, bandwidth, threads=args.threads)
+        results.append(
+            case(problem, raw_sphere_seconds, "samples/topo.npy", "ducc0.sht", args.threads, args.iterations)
+        )
+        print(json.dumps(results[-1]), file=sys.stderr)
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
     with open(args.output, "w") as stream:
         json.dump(report, stream, indent=2)

@@ -52,6 +52,28 @@ class Discrepancy:
         """``dE/dp_i = 2 lam Re sum_l k_l F_l grad psi_l(p_i)``."""
         return 2 * self.weight * self.fourier.gradient_synthesis([self.kernel * self._residual])[0]
 
+    def hessian_gram(self, vectors):
+        """Matrix of the Hessian's bilinear form ``G[a, b] = v_a . H v_b`` on the given fields.
+
+        The Gauss-Newton part is ``2 Re sum_l mult_l k_l conj(J v_a)_l (J v_b)_l``, so no synthesis
+        transform is needed: CG uses the Hessian only through such forms.
+        """
+        jacobians = [self.weight * jv for jv in self.fourier.gradient_analysis(vectors)]
+        count = len(vectors)
+        gram = np.empty((count, count))
+        for a in range(count):
+            for b in range(a, count):
+                product = np.conj(jacobians[a]) * jacobians[b]
+                gram[a, b] = gram[b, a] = 2 * np.sum(self.energy_weights * product.real)
+        if self.hessian == "full":
+            curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)
+            for a in range(count):
+                for b in range(a, count):
+                    extra = np.einsum("mi,mij,mj->", vectors[a], curvature, vectors[b])
+                    gram[a, b] += extra
+                    gram[b, a] = gram[a, b]
+        return gram
+
     def hessian_vectors(self, vectors):
         """Hessian (Gauss-Newton ``2 J^H K J``, or full) applied to each field in ``vectors``."""
         coeffs = self.fourier.gradient_analysis(vectors)

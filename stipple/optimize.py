@@ -15,13 +15,16 @@ STATUSES = ("converged", "max_iterations", "time_limit", "stopped", "no_descent"
 
 @dataclass
 class CGState:
-    """Everything the iteration needs to continue; saved by checkpoints as it is."""
+    """Everything the iteration needs to continue; saved by checkpoints as it is.
+
+    ``gradient_curvature`` and ``direction_curvature`` are ``<h, H h>`` and ``<d, H d>`` at ``points``.
+    """
 
     points: np.ndarray
     gradient: np.ndarray
     direction: np.ndarray
-    hess_gradient: np.ndarray
-    hess_direction: np.ndarray
+    gradient_curvature: float
+    direction_curvature: float
     iteration: int
     initial_gradient_norm: float
     energies: list = field(default_factory=list)
@@ -62,14 +65,14 @@ def initial_state(objective, manifold, points):
     """Energy, gradient and the steepest-descent direction at the starting points."""
     objective.set_points(points)
     gradient = manifold.riesz(points, objective.gradient())
-    (hess_gradient,) = [manifold.riesz(points, hv) for hv in objective.hessian_vectors([gradient])]
+    curvature = float(objective.hessian_gram([gradient])[0, 0])
     norm = manifold.norm(points, gradient)
     return CGState(
         points=points,
         gradient=gradient,
         direction=-gradient,
-        hess_gradient=hess_gradient,
-        hess_direction=-hess_gradient,
+        gradient_curvature=curvature,
+        direction_curvature=curvature,
         iteration=0,
         initial_gradient_norm=norm,
         energies=[objective.energy()],
@@ -78,13 +81,15 @@ def initial_state(objective, manifold, points):
 
 
 def cg_step(objective, manifold, state, restart_every):
-    """One CG iteration; returns the next state, or ``None`` if no descent step exists."""
+    """One CG iteration; returns the next state, or ``None`` if no descent step exists.
+
+    Newton step ``alpha = -<d, h> / <d, H d>``, Daniel's ``beta = <h', H' d~> / <d~, H' d~>`` with the
+    transported direction ``d~``; restart with ``-h'`` when ``d'`` is not a descent direction.
+    """
     points, gradient = state.points, state.gradient
-    direction, hess_direction = state.direction, state.hess_direction
-    curvature = manifold.inner(points, direction, hess_direction)
+    direction, curvature = state.direction, state.direction_curvature
     if not curvature > 0:
-        direction, hess_direction = -gradient, -state.hess_gradient
-        curvature = manifold.inner(points, direction, hess_direction)
+        direction, curvature = -gradient, state.gradient_curvature
         if not curvature > 0:
             return None
     step = -manifold.inner(points, direction, gradient) / curvature * direction
@@ -92,23 +97,21 @@ def cg_step(objective, manifold, state, restart_every):
     objective.set_points(new_points)
     new_gradient = manifold.riesz(new_points, objective.gradient())
     moved = manifold.transport(points, step, direction)
-    hess_gradient, hess_moved = (
-        manifold.riesz(new_points, hv) for hv in objective.hessian_vectors([new_gradient, moved])
-    )
-    beta = manifold.inner(new_points, new_gradient, hess_moved) / manifold.inner(new_points, moved, hess_moved)
+    gram = objective.hessian_gram([new_gradient, moved])
+    beta = gram[0, 1] / gram[1, 1] if gram[1, 1] > 0 else 0.0
     new_direction = -new_gradient + beta * moved
-    new_hess_direction = -hess_gradient + beta * hess_moved
+    new_curvature = gram[0, 0] - 2 * beta * gram[0, 1] + beta**2 * gram[1, 1]
     iteration = state.iteration + 1
     restart = restart_every and iteration % restart_every == 0
     if restart or not manifold.inner(new_points, new_direction, new_gradient) < 0:
-        new_direction, new_hess_direction = -new_gradient, -hess_gradient
+        new_direction, new_curvature = -new_gradient, gram[0, 0]
     return replace(
         state,
         points=new_points,
         gradient=new_gradient,
         direction=new_direction,
-        hess_gradient=hess_gradient,
-        hess_direction=new_hess_direction,
+        gradient_curvature=float(gram[0, 0]),
+        direction_curvature=float(new_curvature),
         iteration=iteration,
         energies=state.energies + [objective.energy()],
         gradient_norms=state.gradient_norms + [manifold.norm(new_points, new_gradient)],

@@ -88,3 +88,15 @@ def test_rectangular_metric_gradient_is_riesz_representer(rng):
     covector = rng.standard_normal((5, 2))
     vector = rng.standard_normal((5, 2))
     assert manifold.inner(None, manifold.riesz(None, covector), vector) == pytest.approx(np.sum(covector * vector))
+
+
+@pytest.mark.parametrize("hessian", ["gauss-newton", "full"])
+def test_hessian_gram_matches_hessian_vectors(rng, hessian):
+    problem, points = small_problem(rng, hessian=hessian)
+    objective = problem.objective
+    objective.set_points(points)
+    u, v = rng.standard_normal((2,) + points.shape)
+    gram = objective.hessian_gram([u, v])
+    hu, hv = objective.hessian_vectors([u, v])
+    expected = np.array([[np.sum(u * hu), np.sum(u * hv)], [np.sum(v * hu), np.sum(v * hv)]])
+    np.testing.assert_allclose(gram, expected, rtol=1e-9)
