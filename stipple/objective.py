@@ -33,6 +33,7 @@ class Discrepancy:
         self.fourier = fourier
         self.kernel = kernel
         self.energy_weights = kernel * fourier.multiplicity
+        self._pair_weights = np.repeat(np.broadcast_to(self.energy_weights, np.shape(target)).ravel(), 2)
         self._jacobian_weights = weight * kernel
         self.target = target
         self.weight = weight
@@ -42,11 +43,14 @@ class Discrepancy:
     def set_points(self, points):
         """Move to ``points`` and compute the residual ``F`` there."""
         self.fourier.set_points(points)
-        self._residual = self.weight * self.fourier.analysis() - self.target
+        residual = self.fourier.analysis()
+        residual *= self.weight
+        residual -= self.target
+        self._residual = residual
 
     def energy(self):
-        residual = self._residual
-        return float(np.sum(self.energy_weights * (residual.real**2 + residual.imag**2)))
+        residual = _real_view(self._residual)
+        return float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
 
     def gradient(self):
         """``dE/dp_i = 2 lam Re sum_l k_l F_l grad psi_l(p_i)``."""
@@ -55,22 +59,16 @@ class Discrepancy:
     def hessian_gram(self, vectors):
         """Matrix of the Hessian's bilinear form ``G[a, b] = v_a . H v_b`` on the given fields.
 
-        The Gauss-Newton part is ``2 Re sum_l mult_l k_l conj(J v_a)_l (J v_b)_l``, so no synthesis
+        The Gauss-Newton part is ``2 lam^2 Re sum_l mult_l k_l conj(J v_a)_l (J v_b)_l``, so no synthesis
         transform is needed: CG uses the Hessian only through such forms.
         """
-        jacobians = [self.weight * jv for jv in self.fourier.gradient_analysis(vectors)]
+        gram = 2 * self.weight**2 * self.fourier.jacobian_gram(vectors, self.energy_weights)
         count = len(vectors)
-        gram = np.empty((count, count))
-        for a in range(count):
-            for b in range(a, count):
-                product = np.conj(jacobians[a]) * jacobians[b]
-                gram[a, b] = gram[b, a] = 2 * np.sum(self.energy_weights * product.real)
         if self.hessian == "full":
             curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)
             for a in range(count):
                 for b in range(a, count):
-                    extra = np.einsum("mi,mij,mj->", vectors[a], curvature, vectors[b])
-                    gram[a, b] += extra
+                    gram[a, b] += np.einsum("mi,mij,mj->", vectors[a], curvature, vectors[b])
                     gram[b, a] = gram[a, b]
         return gram
 
@@ -84,3 +82,8 @@ class Discrepancy:
             curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)
             products = [hv + np.einsum("mij,mj->mi", curvature, v) for hv, v in zip(products, vectors, strict=True)]
         return products
+
+
+def _real_view(coeffs):
+    """Interleaved real and imaginary parts of a contiguous complex array, without a copy."""
+    return np.ascontiguousarray(coeffs).view(np.float64).reshape(-1)

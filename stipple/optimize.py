@@ -29,6 +29,7 @@ class CGState:
     initial_gradient_norm: float
     energies: list = field(default_factory=list)
     gradient_norms: list = field(default_factory=list)
+    rng_state: str = ""
 
     @property
     def energy(self):

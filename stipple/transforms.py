@@ -122,6 +122,7 @@ class TorusFourier:
         n1, n2 = self.modes
         self._synthesis_factor = 2j * np.pi * (n1 + 1j * n2)
         self._analysis_factors = (-1j * np.pi * (n1 - 1j * n2), -1j * np.pi * (n1 + 1j * n2))
+        self._gram_weights = None
         self._ones = None
 
     def set_points(self, points):
@@ -149,6 +150,32 @@ class TorusFourier:
         packed *= self._analysis_factors[0]
         packed += mirrored
         return list(packed)
+
+    def jacobian_gram(self, vectors, weights):
+        """``G[a, b] = Re sum_n weights_n conj(J v_a)_n (J v_b)_n`` with ``J`` = ``gradient_analysis``.
+
+        Works on the packed transforms ``T = T(v_x + i v_y)`` without unpacking: with ``A_n = -pi i (n1 - i n2)``,
+        ``J_n = A_n T_n + conj(A_-n T_-n)``, so for weights symmetric in ``n``
+        ``G = 2 Re sum w |A|^2 conj(Ta) Tb + 2 Re sum w pi^2 (n1 - i n2)^2 Ta_n Tb_-n``.
+        """
+        if self._gram_weights is None or self._gram_weights[0] is not weights:
+            n1, n2 = self.modes
+            self._gram_weights = (
+                weights,
+                2 * weights * np.pi**2 * (n1**2 + n2**2),
+                2 * weights * np.pi**2 * (n1 - 1j * n2) ** 2,
+            )
+        _, same, mirrored = self._gram_weights
+        packed = self.nufft.type1(np.stack([v[:, 0] + 1j * v[:, 1] for v in vectors]))
+        count = len(vectors)
+        gram = np.empty((count, count))
+        for a in range(count):
+            for b in range(a, count):
+                direct = np.einsum("ij,ij,ij->", same, packed[a].real, packed[b].real)
+                direct += np.einsum("ij,ij,ij->", same, packed[a].imag, packed[b].imag)
+                cross = np.einsum("ij,ij,ij->", mirrored, packed[a], packed[b, ::-1, ::-1]).real
+                gram[a, b] = gram[b, a] = direct + cross
+        return gram
 
     def hessian_synthesis(self, coeffs):
         """Second derivatives ``Re sum_n a_n (-4 pi^2 n n^T) e^{2 pi i n.u_i}`` as an ``(M, 2, 2)`` array."""
@@ -226,6 +253,17 @@ class SphereFourier:
             v_theta, v_phi = self._sht.synthesis_general(alm=alm[None], spin=1, mode="DERIV1", **self._options())
             fields.append(v_theta[:, None] * e_theta + v_phi[:, None] * e_phi)
         return fields
+
+    def jacobian_gram(self, vectors, weights):
+        """``G[a, b] = Re sum_l weights_l conj(J v_a)_l (J v_b)_l`` with ``J`` = ``gradient_analysis``."""
+        jacobians = [np.ascontiguousarray(jv).view(np.float64) for jv in self.gradient_analysis(vectors)]
+        pair_weights = np.repeat(weights, 2)
+        count = len(vectors)
+        gram = np.empty((count, count))
+        for a in range(count):
+            for b in range(a, count):
+                gram[a, b] = gram[b, a] = np.einsum("i,i,i->", pair_weights, jacobians[a], jacobians[b])
+        return gram
 
     def gradient_analysis(self, vectors):
         e_theta, e_phi = self._frame

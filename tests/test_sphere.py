@@ -230,3 +230,14 @@ def test_halftone_sphere_descends_and_is_reproducible():
     assert np.max(np.diff(first.energies) / first.energies[:-1]) < 1e-12
     assert first.energies[-1] < 0.1 * first.energies[0]
     np.testing.assert_allclose(np.linalg.norm(first.points, axis=1), 1, atol=1e-14)
+
+
+def test_hessian_gram_matches_hessian_vectors(rng):
+    problem, points = small_problem(rng)
+    objective, manifold = problem.objective, problem.manifold
+    objective.set_points(points)
+    u, v = (manifold.project(points, rng.standard_normal(points.shape)) for _ in range(2))
+    gram = objective.hessian_gram([u, v])
+    hu, hv = objective.hessian_vectors([u, v])
+    expected = np.array([[np.sum(u * hu), np.sum(u * hv)], [np.sum(v * hu), np.sum(v * hv)]])
+    np.testing.assert_allclose(gram, expected, rtol=1e-9)
