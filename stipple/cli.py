@@ -1,9 +1,14 @@
-"""Command-line interface: parses options, calls one library function, writes outputs.
+"""Command-line interface: parses options, builds the problem, runs it, writes outputs.
 
-Exit codes: 0 success, 1 bad data or a runtime problem, 2 bad usage (click's own).
+Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage (click's own); 130 / 143 after
+SIGINT / SIGTERM (a checkpoint and the outputs reached so far are written first).
 """
 
 import io
+import os
+import re
+import shlex
+import signal
 import sys
 import time
 
@@ -12,28 +17,28 @@ import numpy as np
 
 from . import __version__
 from .errors import StippleError
-from .halftone import default_threads
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_writable, output_format, parse_length
 from .transforms import BACKENDS
 
 
 class Progress:
-    """A tqdm bar on stderr showing energy, relative gradient norm and speed; off when quiet or not a TTY."""
+    """A tqdm bar on stderr (energy, relative gradient norm, speed); off when quiet or stderr is not a TTY."""
 
-    def __init__(self, total, quiet, start=0):
+    def __init__(self, total, enabled):
+        self.total = total
+        self.enabled = enabled
         self.bar = None
-        if not quiet and sys.stderr.isatty():
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, initial=start, unit="it", file=sys.stderr, dynamic_ncols=True)
-        self.last = start
 
     def __call__(self, state):
-        if self.bar is not None:
-            self.bar.update(state.iteration - self.last)
-            self.bar.set_postfix_str(f"E={state.energy:.4e} |g|/|g0|={state.relative_gradient_norm:.2e}", refresh=False)
-        self.last = state.iteration
+        if not self.enabled:
+            return False
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=self.total, initial=state.iteration, unit="it", file=sys.stderr, dynamic_ncols=True)
+        self.bar.update(state.iteration - self.bar.n)
+        self.bar.set_postfix_str(f"E={state.energy:.4e} |g|/|g0|={state.relative_gradient_norm:.2e}", refresh=False)
         return False
 
     def close(self):
@@ -41,40 +46,69 @@ class Progress:
             self.bar.close()
 
 
-def run_options(function):
-    """Options shared by ``torus`` and ``sphere``: size, stopping, reproducibility, speed, outputs."""
+class Interruption:
+    """Turns SIGINT / SIGTERM into a request to stop after the current iteration (a second one exits at once)."""
+
+    def __init__(self):
+        self.signal = None
+        self._previous = {}
+
+    def __enter__(self):
+        for number in (signal.SIGINT, signal.SIGTERM):
+            self._previous[number] = signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
+
+    def _handle(self, number, frame):
+        if self.signal is not None:
+            os._exit(128 + number)
+        self.signal = number
+
+    def __call__(self, state):
+        return self.signal is not None
+
+
+def parse_every(text):
+    """``"60s"``, ``"5m"`` (seconds) or ``"100"`` / ``"100it"`` (iterations) -> (seconds, iterations)."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m|h|it)?\s*", str(text))
+    if not match or float(match.group(1)) <= 0:
+        raise StippleError(f"checkpoint-every must be like 60s, 5m or 100 (iterations), not {text!r}")
+    value, unit = float(match.group(1)), match.group(2) or "it"
+    if unit == "it":
+        if value != int(value):
+            raise StippleError(f"checkpoint-every must be a whole number of iterations, not {text!r}")
+        return None, int(value)
+    return value * {"s": 1, "m": 60, "h": 3600}[unit], None
+
+
+def common_options(function):
+    """Options shared by ``torus`` and ``sphere``: size, stopping, reproducibility, speed, files, outputs."""
     options = [
         click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
-        click.option(
-            "-N", "--bandwidth", type=int, default=None, help="Even kernel bandwidth (default: from M, see README)."
-        ),
+        click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
         click.option(
             "--iterations",
             type=click.IntRange(min=0),
             default=2000,
             show_default=True,
-            help="Maximum number of CG iterations.",
+            help="Maximum total number of CG iterations.",
         ),
         click.option(
             "--tol",
             type=float,
             default=1e-4,
             show_default=True,
-            help="Stop at this gradient norm relative to the start.",
+            help="Stop when the gradient norm falls to this fraction of the initial one.",
         ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
-        click.option(
-            "--threads", type=click.IntRange(min=1), default=None, help="Transform threads (default: all usable CPUs)."
-        ),
-        click.option(
-            "--epsilon",
-            type=click.FloatRange(min=1e-14, max=1e-2),
-            default=None,
-            help="Requested accuracy of the transforms.",
-        ),
-        click.option("--invert", is_flag=True, help="White dots on black: w = u instead of 1 - u."),
-        click.option("--gamma", type=float, default=1.0, show_default=True, help="Apply w**gamma."),
+        click.option("--threads", type=int, default=None, help="Transform threads (default: see README)."),
+        click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+        click.option("--invert", is_flag=True, help="Images: w = u (white dots on black); maps: w = 1 - map."),
+        click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
         click.option(
             "--range",
             "value_range",
@@ -89,12 +123,26 @@ def run_options(function):
             multiple=True,
             default=("-",),
             show_default=True,
-            help="Output file (.csv .svg .png, sphere also .geojson); repeatable; '-' is CSV on stdout.",
+            help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
         ),
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
-        click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG (default: keeps the mean tone)."),
+        click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
+        click.option(
+            "--checkpoint",
+            type=click.Path(dir_okay=False),
+            default=None,
+            help="Save the optimiser state here (atomically) during and after the run.",
+        ),
+        click.option(
+            "--checkpoint-every",
+            default="60s",
+            show_default=True,
+            help="Checkpoint interval: seconds (60s, 5m) or iterations (100).",
+        ),
+        click.option("--resume", is_flag=True, help="Continue the run saved in --checkpoint."),
         click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary."),
+        click.option("-v", "--verbose", is_flag=True, help="Also report the settings chosen."),
     ]
     for option in reversed(options):
         function = option(function)
@@ -102,7 +150,7 @@ def run_options(function):
 
 
 def load_input(source, **options):
-    """The density of ``source`` (``-`` is stdin) or a one-line error."""
+    """The density of ``source`` (``-`` is stdin) as an array."""
     if source == "-":
         stream = io.BytesIO(sys.stdin.buffer.read())
         stream.name = "<stdin>"
@@ -118,39 +166,82 @@ def render_settings(width, dot_radius, png_width):
     }
 
 
-def prepare_outputs(paths):
+def prepare_outputs(paths, checkpoint):
     """Check every output's format and directory before any work is done."""
     for path in paths:
         output_format(path)
         check_writable(path)
     if list(paths).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
+    if checkpoint is not None:
+        check_writable(checkpoint)
 
 
-def emit(path, data):
+def write_outputs(paths, render):
+    """Render every output first, then write them (atomically; ``-`` is stdout)."""
     from .outputs import atomic_write
 
-    if path == "-":
-        sys.stdout.buffer.write(data)
-        sys.stdout.buffer.flush()
-    else:
-        atomic_write(path, data)
+    rendered = [(path, render(output_format(path))) for path in paths]
+    for path, data in rendered:
+        if path == "-":
+            sys.stdout.buffer.write(data)
+            sys.stdout.buffer.flush()
+        else:
+            atomic_write(path, data)
 
 
-def report(result, quiet, started):
-    if not quiet:
-        click.echo(f"{result.message}; E={result.energy:.6e}, {time.perf_counter() - started:.1f} s", err=True)
+def solve(problem, options, init):
+    """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options."""
+    from .halftone import run
+
+    seconds, iterations = parse_every(options["checkpoint_every"])
+    if options["verbose"] and not options["quiet"]:
+        click.echo(f"stipple: {problem.domain}, M={problem.n_points}, N={problem.bandwidth}", err=True)
+    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
+    with Interruption() as interruption:
+        try:
+            result = run(
+                problem,
+                init=init,
+                seed=options["seed"],
+                tol=options["tol"],
+                iterations=options["iterations"],
+                time_limit=options["time_limit"],
+                callback=lambda state: progress(state) or interruption(state),
+                checkpoint=options["checkpoint"],
+                checkpoint_seconds=seconds,
+                checkpoint_iterations=iterations,
+                resume=options["resume"],
+            )
+        finally:
+            progress.close()
+    return result, interruption.signal
+
+
+def finish(result, stopped_by, options, started):
+    """Summary on stderr, and the exit code after a signal (130 / 143) with how to resume."""
+    if stopped_by is not None:
+        name = signal.Signals(stopped_by).name
+        if options["checkpoint"]:
+            command = shlex.join(["stipple"] + sys.argv[1:] + ([] if options["resume"] else ["--resume"]))
+            hint = f"resume with: {command}"
+        else:
+            hint = "no --checkpoint was given, so the run cannot be resumed"
+        click.echo(f"stipple: stopped by {name} at iteration {result.iterations}; outputs written; {hint}", err=True)
+        sys.exit(128 + stopped_by)
+    if not options["quiet"]:
+        click.echo(f"stipple: {result.message}; E={result.energy:.6e}; {time.perf_counter() - started:.1f} s", err=True)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="stipple")
 def main():
-    """Halftoning by discrepancy minimisation on the torus and the sphere."""
+    """Halftoning by discrepancy minimisation on the torus (images) and the sphere (global maps)."""
 
 
 @main.command()
 @click.argument("image")
-@run_options
+@common_options
 @click.option(
     "--init",
     default="density",
@@ -165,62 +256,35 @@ def main():
     show_default=True,
     help="Hessian of the Newton step and Daniel's beta.",
 )
-def torus(
-    image,
-    n_points,
-    bandwidth,
-    iterations,
-    tol,
-    time_limit,
-    seed,
-    threads,
-    epsilon,
-    invert,
-    gamma,
-    value_range,
-    outputs,
-    width,
-    dot_radius,
-    png_width,
-    quiet,
-    init,
-    backend,
-    hessian,
-):
-    """Stipple IMAGE (PNG, JPEG, TIFF, or a .npy map; '-' for stdin) on the torus."""
+def torus(image, **options):
+    """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus."""
     from .outputs import torus_output
-    from .torus import DEFAULT_EPSILON, halftone_torus
+    from .torus import DEFAULT_EPSILON, torus_problem
 
     started = time.perf_counter()
     try:
-        settings = render_settings(width, dot_radius, png_width)
-        prepare_outputs(outputs)
-        weights = load_input(image, invert=invert, gamma=gamma, value_range=value_range)
-        start = read_torus_init(init, weights.shape)
-        progress = Progress(iterations, quiet)
-        try:
-            result = halftone_torus(
-                weights,
-                n_points,
-                bandwidth,
-                init=start,
-                seed=seed,
-                tol=tol,
-                iterations=iterations,
-                time_limit=time_limit,
-                backend=backend,
-                threads=threads or default_threads(),
-                epsilon=epsilon or DEFAULT_EPSILON,
-                hessian=hessian,
-                callback=progress,
-            )
-        finally:
-            progress.close()
-        for path in outputs:
-            emit(path, torus_output(result.points, weights.shape, output_format(path), ink=weights.mean(), **settings))
+        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        prepare_outputs(options["outputs"], options["checkpoint"])
+        weights = load_input(
+            image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+        )
+        problem = torus_problem(
+            weights,
+            options["n_points"],
+            options["bandwidth"],
+            backend=options["backend"],
+            threads=options["threads"],
+            epsilon=options["epsilon"] or DEFAULT_EPSILON,
+            hessian=options["hessian"],
+        )
+        result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
+        write_outputs(
+            options["outputs"],
+            lambda fmt: torus_output(result.points, weights.shape, fmt, ink=weights.mean(), **settings),
+        )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
-    report(result, quiet, started)
+    finish(result, stopped_by, options, started)
 
 
 def read_torus_init(init, shape):
@@ -236,7 +300,7 @@ def read_torus_init(init, shape):
 
 @main.command()
 @click.argument("map_source", metavar="MAP", required=False)
-@run_options
+@common_options
 @click.option("--uniform", is_flag=True, help="w ≡ 1 (numerical spherical designs); no MAP.")
 @click.option(
     "--lon0",
@@ -263,81 +327,44 @@ def read_torus_init(init, shape):
     help="PNG view: orthographic globe or equirectangular map.",
 )
 @click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees).")
-def sphere(
-    map_source,
-    n_points,
-    bandwidth,
-    iterations,
-    tol,
-    time_limit,
-    seed,
-    threads,
-    epsilon,
-    invert,
-    gamma,
-    value_range,
-    outputs,
-    width,
-    dot_radius,
-    png_width,
-    quiet,
-    uniform,
-    lon0,
-    kernel,
-    init,
-    coords,
-    projection,
-    view,
-):
+def sphere(map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
     from .outputs import sphere_output
-    from .sphere import DEFAULT_EPSILON, halftone_sphere, lon_lat
+    from .sphere import DEFAULT_EPSILON, lon_lat, sphere_problem
 
     started = time.perf_counter()
     try:
-        settings = render_settings(width, dot_radius, png_width)
-        view_angles = parse_view(view)
-        prepare_outputs(outputs)
-        density = load_sphere_density(
-            map_source, uniform, invert=invert, gamma=gamma, value_range=value_range, lon0=lon0
+        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        view = parse_view(options["view"])
+        prepare_outputs(options["outputs"], options["checkpoint"])
+        density = load_sphere_density(map_source, options)
+        problem = sphere_problem(
+            density,
+            options["n_points"],
+            options["bandwidth"],
+            kernel=options["kernel"],
+            threads=options["threads"],
+            epsilon=options["epsilon"] or DEFAULT_EPSILON,
         )
-        progress = Progress(iterations, quiet)
-        try:
-            result = halftone_sphere(
-                density,
-                n_points,
-                bandwidth,
-                kernel=kernel,
-                init=read_sphere_init(init),
-                seed=seed,
-                tol=tol,
-                iterations=iterations,
-                time_limit=time_limit,
-                threads=threads or default_threads(),
-                epsilon=epsilon or DEFAULT_EPSILON,
-                callback=progress,
-            )
-        finally:
-            progress.close()
+        result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
         degrees = lon_lat(result.points)
-        for path in outputs:
-            emit(
-                path,
-                sphere_output(
-                    result.points,
-                    degrees,
-                    output_format(path),
-                    coords=coords,
-                    projection=projection,
-                    view=view_angles,
-                    ink=density.mean,
-                    **settings,
-                ),
-            )
+        write_outputs(
+            options["outputs"],
+            lambda fmt: sphere_output(
+                result.points,
+                degrees,
+                fmt,
+                coords=options["coords"],
+                projection=options["projection"],
+                view=view,
+                ink=density.mean,
+                **settings,
+            ),
+        )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
-    report(result, quiet, started)
+    finish(result, stopped_by, options, started)
 
 
 def parse_view(text):
@@ -345,16 +372,16 @@ def parse_view(text):
         lon, lat = (float(part) for part in text.split(","))
     except ValueError:
         raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
-    if not -90 <= lat <= 90:
-        raise StippleError(f"view latitude must be in [-90, 90], not {lat}")
+    if not (-90 <= lat <= 90 and np.isfinite(lon)):
+        raise StippleError(f"view must be a finite longitude and a latitude in [-90, 90], not {text!r}")
     return lon, lat
 
 
-def load_sphere_density(source, uniform, lon0, **options):
+def load_sphere_density(source, options):
     """The density object of MAP, a built-in name, or w ≡ 1."""
     from .sphere import BUILTINS, CellMap
 
-    if uniform:
+    if options["uniform"]:
         if source is not None:
             raise StippleError("give either MAP or --uniform, not both")
         return BUILTINS["uniform"]
@@ -365,7 +392,8 @@ def load_sphere_density(source, uniform, lon0, **options):
         if name not in BUILTINS:
             raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
         return BUILTINS[name]
-    return CellMap(load_input(source, **options), lon0)
+    values = load_input(source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"])
+    return CellMap(values, options["lon0"])
 
 
 def read_sphere_init(init):

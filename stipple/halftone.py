@@ -1,12 +1,13 @@
 """The shared driver: a problem (manifold + objective + sampler) and a CG run on it."""
 
+import json
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import StippleError
-from .optimize import minimize
+from .optimize import initial_state, minimize
 
 MAX_POINTS = 20_000_000
 MAX_BANDWIDTH = 8192
@@ -62,6 +63,18 @@ def check_count(n_points):
     return int(n_points)
 
 
+def check_threads(threads):
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not 1 <= threads <= 1024:
+        raise StippleError(f"threads must be an integer in [1, 1024], not {threads!r}")
+    return int(threads)
+
+
+def check_epsilon(epsilon):
+    if not isinstance(epsilon, (int, float, np.floating)) or not 1e-14 <= epsilon <= 1e-2:
+        raise StippleError(f"epsilon must be a number in [1e-14, 1e-2], not {epsilon!r}")
+    return float(epsilon)
+
+
 def check_bandwidth(bandwidth):
     valid = isinstance(bandwidth, (int, np.integer)) and not isinstance(bandwidth, bool)
     if not valid or not 2 <= bandwidth <= MAX_BANDWIDTH or bandwidth % 2:
@@ -89,9 +102,9 @@ def initial_points(problem, init, rng):
     expected = (problem.n_points, problem.manifold.dimension)
     if points.shape != expected:
         raise StippleError(f"initial points must have shape {expected}, not {points.shape}")
-    if not np.all(np.isfinite(points)):
-        raise StippleError("initial points contain NaN or infinite values")
-    return points
+    if not np.all(np.isfinite(points)) or (problem.domain == "sphere" and np.any(np.all(points == 0, axis=1))):
+        raise StippleError("initial points contain NaN, infinite or (on the sphere) zero vectors")
+    return problem.manifold.canonical(points)
 
 
 def run(
@@ -104,27 +117,60 @@ def run(
     time_limit=None,
     restart_every=None,
     callback=None,
-    state=None,
+    checkpoint=None,
+    checkpoint_seconds=None,
+    checkpoint_iterations=None,
+    resume=False,
 ):
-    """Optimise ``problem`` from ``init`` (or continue from ``state``) and collect the result."""
+    """Optimise ``problem`` from ``init``, or resume it from a checkpoint, and collect the result.
+
+    Parameters
+    ----------
+    problem : Problem
+    init : {"density", "uniform"} or array
+        Starting points: i.i.d. from the density (default), uniform, or given (internal coordinates).
+    seed : int
+        Seed of the random start.
+    tol, iterations, time_limit, restart_every, callback :
+        See ``stipple.optimize.minimize``; ``iterations`` counts from the very start of a resumed run.
+    checkpoint : path, optional
+        Save the complete state there (atomically) every ``checkpoint_seconds`` or
+        ``checkpoint_iterations``, and when the run ends. An existing file is never overwritten unless
+        the run resumes from it.
+    resume : bool
+        Continue from ``checkpoint`` (refused if it belongs to another problem).
+    """
+    from .checkpoint import Checkpointer, load_checkpoint
+
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
         raise StippleError(f"iterations must be a non-negative integer, not {iterations!r}")
-    points = None
-    if state is None:
-        points = initial_points(problem, init, np.random.default_rng(seed))
+    saver = None
+    if checkpoint is not None:
+        if not resume and os.path.exists(checkpoint):
+            raise StippleError(f"{checkpoint}: checkpoint exists; resume it or remove it first")
+        saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)
+    elif resume:
+        raise StippleError("resume needs a checkpoint file")
+    if resume:
+        state = load_checkpoint(checkpoint, problem)
+    else:
+        rng = np.random.default_rng(seed)
+        state = initial_state(problem.objective, problem.manifold, initial_points(problem, init, rng))
+        state.rng_state = json.dumps(rng.bit_generator.state)
     outcome = minimize(
         problem.objective,
         problem.manifold,
-        points,
         state=state,
         tol=tol,
         max_iterations=iterations,
         time_limit=time_limit,
         restart_every=restart_every,
-        callback=callback,
+        callback=_chain(saver, callback),
     )
+    if saver is not None:
+        saver.save(outcome.state)
     return HalftoneResult(
         points=outcome.points,
         status=outcome.status,
@@ -138,3 +184,11 @@ def run(
         bandwidth=problem.bandwidth,
         state=outcome.state,
     )
+
+
+def _chain(*callbacks):
+    """One callback calling each given one in turn; stops when any of them asks to."""
+    active = [callback for callback in callbacks if callback is not None]
+    if not active:
+        return None
+    return lambda state: any([callback(state) for callback in active])

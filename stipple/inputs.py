@@ -37,7 +37,7 @@ def load_gray(data, name="input"):
     except (Image.DecompressionBombError, Image.DecompressionBombWarning):
         raise StippleError(f"{name}: image is too large (Pillow's decompression-bomb guard)") from None
     except UnidentifiedImageError:
-        raise StippleError(f"{name}: not an image or .npy file Stipple can read") from None
+        raise StippleError(f"{name}: cannot decode image (not a supported image or .npy file, or truncated)") from None
     except (OSError, SyntaxError, ValueError) as error:
         raise StippleError(f"{name}: cannot decode image ({error})") from None
     image = ImageOps.exif_transpose(image)

@@ -38,6 +38,10 @@ class Torus:
         """Parallel transport along ``exp(t v)`` is the identity on a flat torus."""
         return w
 
+    def canonical(self, points):
+        """Points wrapped into [0, 1)²."""
+        return np.mod(points, 1.0)
+
     def random(self, rng, count):
         return rng.random((count, 2))
 
@@ -74,6 +78,10 @@ class Sphere:
         along = np.sum(w * direction, axis=1, keepdims=True)
         moved = along * (np.cos(length) * direction - np.sin(length) * points) + w - along * direction
         return self.project(self.retract(points, v), moved)
+
+    def canonical(self, points):
+        """Points scaled onto the unit sphere."""
+        return points / np.linalg.norm(points, axis=1, keepdims=True)
 
     def random(self, rng, count):
         points = rng.standard_normal((count, 3))

@@ -33,10 +33,13 @@ def check_writable(path):
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
         raise StippleError(f"{path}: directory {directory} does not exist")
-    if not os.access(directory, os.W_OK | os.X_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
-        raise StippleError(f"{path}: not writable")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    try:
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as error:
+        raise StippleError(f"{path}: not writable ({error.strerror})") from None
 
 
 def atomic_write(path, data):

@@ -4,7 +4,7 @@ import numpy as np
 from scipy.special import roots_legendre
 
 from .errors import StippleError
-from .halftone import MAX_BANDWIDTH, Problem, check_count, default_threads, run
+from .halftone import MAX_BANDWIDTH, Problem, check_count, check_epsilon, check_threads, default_threads, run
 from .inputs import check_grid
 from .kernels import sphere_kernel
 from .manifolds import Sphere
@@ -182,7 +182,8 @@ def sphere_problem(
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
     bandwidth = check_degree(default_bandwidth(n_points) if bandwidth is None else bandwidth)
-    threads = default_threads() if threads is None else threads
+    threads = default_threads() if threads is None else check_threads(threads)
+    epsilon = check_epsilon(epsilon)
     target = density.coefficients(bandwidth, threads)
     degrees, _ = alm_degrees_orders(bandwidth)
     kernel_coeffs = sphere_kernel(kernel, degrees)
@@ -207,28 +208,13 @@ def sphere_problem(
 
 
 def halftone_sphere(
-    weights,
-    n_points,
-    bandwidth=None,
-    *,
-    lon0=0.0,
-    kernel="distance",
-    init="density",
-    seed=0,
-    tol=1e-4,
-    iterations=2000,
-    time_limit=None,
-    threads=None,
-    epsilon=DEFAULT_EPSILON,
-    restart_every=None,
-    callback=None,
-    state=None,
+    weights, n_points, bandwidth=None, *, lon0=0.0, kernel="distance", threads=None, epsilon=DEFAULT_EPSILON, **options
 ):
     """Place ``n_points`` dots on the unit sphere so that they reproduce a density.
 
     Parameters
     ----------
-    weights : array_like (H, W), callable, or None
+    weights : array_like (H, W), callable, density object, or None
         An equirectangular map of ``w >= 0`` (row 0 at the north pole, column 0 starting at ``lon0``
         degrees east), a function of unit vectors ``(M, 3) -> (M,)``, or None for ``w ≡ 1``
         (numerical spherical designs).
@@ -239,11 +225,14 @@ def halftone_sphere(
     lon0 : float
         Longitude (degrees east) where the map's first column starts.
     kernel : str
-        ``"distance"`` (default, the paper's) or ``"sobolev:S"`` (see ``sphere_kernel``).
-    init : {"density", "uniform"} or array (M, 3)
-        Starting points (given points are normalised onto the sphere).
-    seed, tol, iterations, time_limit, threads, epsilon, restart_every, callback, state :
-        As for ``halftone_torus``.
+        ``"distance"`` (default, the paper's) or ``"sobolev:S"`` (see ``stipple.kernels.sphere_kernel``).
+    threads : int, optional
+        Threads for the transforms (default: all usable CPUs; ducc0's spherical transforms are
+        deterministic for a fixed thread count).
+    epsilon : float
+        Requested accuracy of the transforms.
+    **options
+        As for ``halftone_torus``; ``init`` may be an (M, 3) array (normalised onto the sphere).
 
     Returns
     -------
@@ -251,20 +240,7 @@ def halftone_sphere(
         ``points`` as unit vectors of shape (M, 3); ``stipple.sphere.lon_lat`` converts them.
     """
     problem = sphere_problem(weights, n_points, bandwidth, lon0=lon0, kernel=kernel, threads=threads, epsilon=epsilon)
-    if not isinstance(init, str):
-        init = np.asarray(init, dtype=np.float64)
-        init = init / np.linalg.norm(init, axis=-1, keepdims=True)
-    return run(
-        problem,
-        init=init,
-        seed=seed,
-        tol=tol,
-        iterations=iterations,
-        time_limit=time_limit,
-        restart_every=restart_every,
-        callback=callback,
-        state=state,
-    )
+    return run(problem, **options)
 
 
 def three_gaussians(points):

@@ -3,7 +3,7 @@
 import numpy as np
 
 from .errors import StippleError
-from .halftone import Problem, check_bandwidth, check_count, default_threads, run
+from .halftone import Problem, check_bandwidth, check_count, check_epsilon, check_threads, run
 from .inputs import check_grid
 from .kernels import ball_kernel
 from .manifolds import Torus
@@ -88,7 +88,8 @@ def torus_problem(
     bandwidth = check_bandwidth(default_bandwidth(n_points) if bandwidth is None else bandwidth)
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    threads = default_threads() if threads is None else threads
+    threads = 1 if threads is None else check_threads(threads)
+    epsilon = check_epsilon(epsilon)
     scale = torus_scale(weights.shape)
     bandwidths = axis_bandwidths(bandwidth, weights.shape)
     target = image_coefficients(weights, bandwidths)
@@ -119,18 +120,11 @@ def halftone_torus(
     n_points,
     bandwidth=None,
     *,
-    init="density",
-    seed=0,
-    tol=1e-4,
-    iterations=2000,
-    time_limit=None,
     backend="ducc0",
     threads=None,
     epsilon=DEFAULT_EPSILON,
     hessian="gauss-newton",
-    restart_every=None,
-    callback=None,
-    state=None,
+    **options,
 ):
     """Place ``n_points`` dots on the torus so that they reproduce the density ``weights``.
 
@@ -143,26 +137,19 @@ def halftone_torus(
         Number of dots M, 1 <= M <= 20,000,000.
     bandwidth : int, optional
         Even bandwidth N of the kernel along the longer image side (default ``default_bandwidth(M)``).
-    init : {"density", "uniform"} or array of shape (M, 2)
-        Starting points: i.i.d. from ``weights`` (default), uniform, or given in [0, 1)² unit coordinates.
-    seed : int
-        Seed of the random starting points.
-    tol, iterations, time_limit :
-        Stop at relative gradient norm ``tol``, after ``iterations`` iterations, or after ``time_limit`` s.
     backend : {"ducc0", "finufft"}
         NUFFT library.
     threads : int, optional
-        Threads for the transforms (default: all usable CPUs).
+        Threads for the transforms. Default 1: both libraries' multi-threaded type-1 transforms add
+        in a scheduling-dependent order, so only one thread gives bit-for-bit reproducible points.
     epsilon : float
         Requested accuracy of the transforms.
     hessian : {"gauss-newton", "full"}
         Hessian used by the Newton step and Daniel's beta.
-    restart_every : int, optional
-        Periodic steepest-descent restarts.
-    callback : callable, optional
-        ``callback(state)`` after every iteration (``stipple.optimize.CGState``); return True to stop.
-    state : CGState, optional
-        Continue a saved run instead of starting from ``init``.
+    **options
+        ``init``, ``seed``, ``tol``, ``iterations``, ``time_limit``, ``restart_every``, ``callback``,
+        ``checkpoint``, ``checkpoint_seconds``, ``checkpoint_iterations``, ``resume``: see
+        ``stipple.halftone.run``. ``init`` may be an (M, 2) array in unit coordinates.
 
     Returns
     -------
@@ -173,14 +160,4 @@ def halftone_torus(
     problem = torus_problem(
         weights, n_points, bandwidth, backend=backend, threads=threads, epsilon=epsilon, hessian=hessian
     )
-    return run(
-        problem,
-        init=init,
-        seed=seed,
-        tol=tol,
-        iterations=iterations,
-        time_limit=time_limit,
-        restart_every=restart_every,
-        callback=callback,
-        state=state,
-    )
+    return run(problem, **options)

@@ -1,0 +1,263 @@
+"""Every bad input: one line on stderr naming the problem, a documented exit code, outputs untouched."""
+
+import json
+import zipfile
+
+import numpy as np
+import PIL.Image
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.checkpoint import save_checkpoint
+from stipple.cli import main
+from stipple.halftone import run
+from stipple.torus import torus_problem
+
+KEEP = "precious\n"
+
+
+@pytest.fixture
+def files(tmp_path):
+    image = tmp_path / "ok.png"
+    Image.fromarray(np.tile(np.arange(0, 240, 15, dtype=np.uint8), (12, 1))).save(image)
+    output = tmp_path / "out.csv"
+    output.write_text(KEEP)
+    return tmp_path, image, output
+
+
+def invoke(args, expected_code=1):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exit_code == expected_code, result.output
+    assert "Traceback" not in result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 if expected_code == 1 else lines, result.output
+    return result.output
+
+
+def check_torus(args, message, files, expected_code=1):
+    _, _, output = files
+    text = invoke(["torus", *args, "-M", 30, "-N", 8, "--iterations", 2, "-q", "-o", output], expected_code)
+    assert message in text
+    assert output.read_text() == KEEP
+
+
+def write(path, data):
+    path.write_bytes(data)
+    return path
+
+
+def npy(path, array):
+    np.save(path, array)
+    return path
+
+
+def test_missing_file(files):
+    check_torus([files[0] / "nope.png"], "cannot read", files)
+
+
+def test_directory_instead_of_file(files):
+    check_torus([files[0]], "cannot read", files)
+
+
+def test_empty_file(files):
+    check_torus([write(files[0] / "empty.png", b"")], "file is empty", files)
+
+
+def test_truncated_png(files):
+    data = files[1].read_bytes()
+    check_torus([write(files[0] / "cut.png", data[: len(data) // 2])], "cannot decode image", files)
+
+
+def test_not_an_image(files):
+    check_torus([write(files[0] / "notes.png", b"just some text\n")], "cannot decode image", files)
+
+
+def test_truncated_npy(files):
+    full = npy(files[0] / "full.npy", np.ones((20, 20))).read_bytes()
+    check_torus([write(files[0] / "cut.npy", full[:100])], "corrupt or truncated .npy", files)
+
+
+@pytest.mark.parametrize(
+    "array,message",
+    [
+        (np.full((4, 4), np.nan), "NaN or infinite"),
+        (np.array([[1.0, np.inf], [0.0, 1.0]]), "NaN or infinite"),
+        (np.ones((3, 4, 5)), "expected a 2-D map"),
+        (np.ones(7), "expected a 2-D map"),
+        (np.ones((1, 1)), "at least 2×2"),
+        (np.full((5, 5), 3.0), "map is constant"),
+        (np.zeros((5, 5)), "map is constant"),
+        (np.array([["a", "b"], ["c", "d"]]), "must hold real numbers"),
+    ],
+)
+def test_bad_arrays(files, array, message):
+    check_torus([npy(files[0] / "bad.npy", array)], message, files)
+
+
+def test_object_npy_is_never_unpickled(files):
+    path = files[0] / "objects.npy"
+    np.save(path, np.array([{"evil": 1}, None], dtype=object), allow_pickle=True)
+    check_torus([path], "holds Python objects", files)
+
+
+def test_all_white_image(files):
+    Image.new("L", (8, 8), 255).save(files[0] / "white.png")
+    check_torus([files[0] / "white.png"], "blank (all white)", files)
+
+
+def test_all_white_map_on_the_sphere(files):
+    Image.new("L", (8, 4), 255).save(files[0] / "white.png")
+    text = invoke(["sphere", files[0] / "white.png", "-q", "-o", files[2]])
+    assert "zero everywhere" in text and files[2].read_text() == KEEP
+
+
+def test_decompression_bomb(files, monkeypatch):
+    monkeypatch.setattr(PIL.Image, "MAX_IMAGE_PIXELS", 50)
+    check_torus([files[1]], "decompression-bomb guard", files)
+
+
+@pytest.mark.parametrize(
+    "option,message",
+    [
+        (["-M", "0"], "number of points must be an integer in [1,"),
+        (["-M", "-5"], "number of points must be an integer in [1,"),
+        (["-M", "999999999"], "number of points must be an integer in [1,"),
+        (["-N", "9"], "bandwidth must be an even integer"),
+        (["-N", "-2"], "bandwidth must be an even integer"),
+        (["-N", "100000"], "bandwidth must be an even integer"),
+        (["--threads", "0"], "threads must be an integer"),
+        (["--epsilon", "1e-20"], "epsilon must be a number"),
+        (["--time-limit", "-3"], "time_limit must be a positive number"),
+        (["--checkpoint-every", "soon"], "checkpoint-every must be like"),
+        (["--dot-radius", "-1mm"], "length must be a positive number"),
+    ],
+)
+def test_bad_numbers(files, option, message):
+    # Options come last so that they override the helper's -M / -N.
+    _, image, output = files
+    text = invoke(["torus", image, "-M", 30, "-N", 8, "--iterations", 2, "-q", "-o", output, *option])
+    assert message in text and output.read_text() == KEEP
+
+
+def test_usage_errors_exit_two(files):
+    invoke(["torus", files[1], "-M", "many"], expected_code=2)
+    invoke(["torus", files[1], "--backend", "fftw"], expected_code=2)
+    invoke(["torus"], expected_code=2)
+
+
+def test_unknown_output_extension(files):
+    _, image, output = files
+    text = invoke(["torus", image, "-M", 30, "-N", 8, "-q", "-o", output, "-o", files[0] / "dots.xyz"])
+    assert "unknown output format .xyz" in text and output.read_text() == KEEP
+
+
+@pytest.mark.parametrize("target", ["missing-dir/dots.csv", "folder.csv"])
+def test_unwritable_output(files, target):
+    _, image, output = files
+    (files[0] / "folder.csv").mkdir()
+    text = invoke(["torus", image, "-M", 30, "-N", 8, "-q", "-o", output, "-o", files[0] / target])
+    assert ("does not exist" in text or "is a directory" in text) and output.read_text() == KEEP
+
+
+def test_read_only_filesystem_is_caught_before_the_run(files):
+    _, image, output = files
+    text = invoke(["torus", image, "-M", 30, "-N", 8, "-q", "-o", output, "-o", "/proc/dots.csv"])
+    assert "not writable" in text and output.read_text() == KEEP
+
+
+def saved_checkpoint(tmp_path, image_weights):
+    problem = torus_problem(image_weights, 30, 8, threads=1)
+    path = tmp_path / "good.npz"
+    run(problem, iterations=2, checkpoint=path)
+    return path
+
+
+def weights_of(image):
+    from stipple import load_density
+
+    return load_density(image)
+
+
+def resume(files, checkpoint):
+    _, image, output = files
+    args = ["torus", image, "-M", 30, "-N", 8, "--iterations", 4, "-q", "-o", output]
+    return invoke(args + ["--checkpoint", checkpoint, "--resume"])
+
+
+def test_truncated_checkpoint(files):
+    good = saved_checkpoint(files[0], weights_of(files[1])).read_bytes()
+    text = resume(files, write(files[0] / "cut.npz", good[: len(good) // 2]))
+    assert "corrupt or truncated checkpoint" in text and files[2].read_text() == KEEP
+
+
+def test_corrupt_checkpoint(files):
+    text = resume(files, write(files[0] / "noise.npz", bytes(range(256)) * 10))
+    assert "corrupt or truncated checkpoint" in text
+
+
+def test_foreign_checkpoint(files):
+    path = files[0] / "foreign.npz"
+    np.savez(path, weights=np.ones(3))
+    assert "not a stipple checkpoint" in resume(files, path)
+
+
+def test_newer_checkpoint(files):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    with np.load(path) as archive:
+        contents = dict(archive)
+    metadata = json.loads(str(contents["metadata"]))
+    metadata["version"] = 99
+    contents["metadata"] = np.asarray(json.dumps(metadata))
+    np.savez(path, **contents)
+    assert "format version 99 is newer" in resume(files, path)
+
+
+def test_checkpoint_with_damaged_arrays(files):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    with np.load(path) as archive:
+        contents = dict(archive)
+    contents["points"] = contents["points"][:5]
+    np.savez(path, **contents)
+    assert "corrupt checkpoint" in resume(files, path)
+
+
+def test_checkpoint_for_another_input(files):
+    path = saved_checkpoint(files[0], 1 - weights_of(files[1]))
+    assert "the input differs" in resume(files, path)
+
+
+def test_resume_without_checkpoint_file(files):
+    assert "no checkpoint to resume" in resume(files, files[0] / "never-written.npz")
+
+
+def test_existing_checkpoint_is_not_clobbered(files):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    before = path.read_bytes()
+    text = invoke(["torus", files[1], "-M", 30, "-N", 8, "-q", "-o", files[2], "--checkpoint", path])
+    assert "checkpoint exists" in text and path.read_bytes() == before
+
+
+def test_checkpoint_is_a_zip_of_plain_arrays(files):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    with zipfile.ZipFile(path) as archive:
+        assert all(name.endswith(".npy") for name in archive.namelist())
+    with np.load(path, allow_pickle=False) as archive:
+        assert archive["points"].shape == (30, 2)
+        assert json.loads(str(archive["metadata"]))["settings"]["points"] == 30
+
+
+def test_save_is_atomic_when_the_target_directory_vanishes(files, monkeypatch):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    before = path.read_bytes()
+    problem = torus_problem(weights_of(files[1]), 30, 8, threads=1)
+    state = run(problem, iterations=3).state
+
+    def failing_replace(source, target):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("os.replace", failing_replace)
+    with pytest.raises(Exception, match="No space left"):
+        save_checkpoint(path, state, problem)
+    assert path.read_bytes() == before
+    assert not [p for p in files[0].iterdir() if p.name.startswith(".stipple-")]

@@ -1,0 +1,108 @@
+"""Property-based tests: loaders and option parsers either succeed with valid values or raise StippleError."""
+
+import io
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from stipple.cli import parse_every, parse_view
+from stipple.errors import StippleError
+from stipple.inputs import NPY_MAGIC, load_density, read_points_csv
+from stipple.outputs import UNITS, parse_length
+
+FAST = settings(max_examples=150, deadline=None)
+SHAPES = st.tuples(st.integers(0, 5), st.integers(0, 5)) | st.tuples(st.integers(1, 3))
+
+
+def bytes_source(data, name="input"):
+    stream = io.BytesIO(data)
+    stream.name = name
+    return stream
+
+
+@FAST
+@given(st.binary(max_size=400))
+def test_arbitrary_bytes_load_or_fail_cleanly(data):
+    try:
+        density = load_density(bytes_source(data))
+    except StippleError:
+        return
+    assert density.ndim == 2 and np.all((density >= 0) & (density <= 1))
+
+
+@FAST
+@given(st.binary(max_size=300))
+def test_arbitrary_npy_payloads_fail_cleanly(tail):
+    try:
+        load_density(bytes_source(NPY_MAGIC + tail))
+    except StippleError:
+        return
+
+
+@FAST
+@given(
+    st.one_of(
+        arrays(np.float64, SHAPES, elements=st.floats(allow_nan=True, allow_infinity=True)),
+        arrays(np.int16, SHAPES),
+        arrays(np.bool_, SHAPES),
+    )
+)
+def test_numeric_arrays_load_or_fail_cleanly(array):
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    try:
+        density = load_density(bytes_source(buffer.getvalue()))
+    except StippleError:
+        return
+    assert density.shape == array.shape and np.all((density >= 0) & (density <= 1))
+    assert np.isclose(density.min(), 0) and np.isclose(density.max(), 1)
+
+
+@FAST
+@given(st.text(max_size=20))
+def test_parse_length(text):
+    try:
+        value, unit = parse_length(text)
+    except StippleError:
+        return
+    assert value > 0 and unit in UNITS
+
+
+@FAST
+@given(st.floats(1e-3, 1e4), st.sampled_from(["mm", "cm", "in", "px", ""]))
+def test_parse_length_round_trip(value, unit):
+    parsed = parse_length(f"{value!r}{unit}")
+    assert parsed == (value, unit or "mm")
+
+
+@FAST
+@given(st.text(max_size=12))
+def test_parse_every(text):
+    try:
+        seconds, iterations = parse_every(text)
+    except StippleError:
+        return
+    assert (seconds is None) != (iterations is None)
+    assert (seconds or iterations) > 0
+
+
+@FAST
+@given(st.text(max_size=16))
+def test_parse_view(text):
+    try:
+        lon, lat = parse_view(text)
+    except StippleError:
+        return
+    assert -90 <= lat <= 90 and np.isfinite(lon)
+
+
+@FAST
+@given(st.text(max_size=200))
+def test_points_csv(text):
+    try:
+        points = read_points_csv(bytes_source(text.encode()), ("x", "y"))
+    except StippleError:
+        return
+    assert points.shape[1] == 2 and len(points) > 0 and np.all(np.isfinite(points))
