@@ -84,9 +84,81 @@ def parse_every(text):
     return value * {"s": 1, "m": 60, "h": 3600}[unit], None
 
 
+CONFIG_ALIASES = {"points": "n_points", "output": "outputs", "range": "value_range", "input": None}
+PATH_KEYS = ("outputs", "init", "checkpoint")
+
+
+def load_config(ctx, param, value):
+    """Read ``--config FILE.toml`` into the command's defaults (options on the command line win).
+
+    Keys are the long option names (``points``, ``bandwidth``, ``tol``, ``output``, ...) and ``input`` for
+    the IMAGE/MAP argument; relative paths are relative to the config file. Unknown keys and values
+    of the wrong type are errors naming the key.
+    """
+    if value is None:
+        return None
+    import tomllib
+
+    try:
+        with open(value, "rb") as stream:
+            table = tomllib.load(stream)
+    except OSError as error:
+        raise click.BadParameter(f"cannot read {value}: {error.strerror}", ctx, param) from None
+    except tomllib.TOMLDecodeError as error:
+        raise click.BadParameter(f"{value} is not valid TOML: {error}", ctx, param) from None
+    base = os.path.dirname(os.path.abspath(value))
+    parameters = {p.name: p for p in ctx.command.params if p.name != "config"}
+    defaults = {}
+    for key, item in table.items():
+        name = CONFIG_ALIASES.get(key, key.replace("-", "_"))
+        if key == "input":
+            defaults["input"] = _relative_to(base, item, key, value) if not str(item).startswith("builtin:") else item
+            continue
+        if name not in parameters or isinstance(parameters[name], click.Argument):
+            raise click.BadParameter(f"unknown key {key!r} in {value}", ctx, param)
+        if isinstance(item, bool) != getattr(parameters[name], "is_flag", False):
+            raise click.BadParameter(f"key {key!r} in {value}: wrong type {type(item).__name__}", ctx, param)
+        try:
+            converted = parameters[name].type_cast_value(ctx, item)
+        except click.BadParameter as error:
+            raise click.BadParameter(f"key {key!r} in {value}: {error.message}", ctx, param) from None
+        if name in PATH_KEYS:
+            converted = _resolve_paths(base, converted)
+        defaults[name] = converted
+    ctx.default_map = {**(ctx.default_map or {}), **defaults}
+    return value
+
+
+def _relative_to(base, path, key, config):
+    if not isinstance(path, str):
+        raise click.BadParameter(f"key {key!r} in {config}: expected a path")
+    return path if path == "-" or os.path.isabs(path) else os.path.join(base, path)
+
+
+def _resolve_paths(base, value):
+    if isinstance(value, tuple):
+        return tuple(_resolve_paths(base, item) for item in value)
+    if value is None or value in ("-", "density", "uniform") or os.path.isabs(value):
+        return value
+    return os.path.join(base, value)
+
+
+def resolve_input(ctx, given):
+    """The IMAGE/MAP argument, or ``input`` from the config file."""
+    return given if given is not None else (ctx.default_map or {}).get("input")
+
+
 def common_options(function):
     """Options shared by ``torus`` and ``sphere``: size, stopping, reproducibility, speed, files, outputs."""
     options = [
+        click.option(
+            "--config",
+            type=click.Path(dir_okay=False),
+            callback=load_config,
+            is_eager=True,
+            expose_value=False,
+            help="TOML file of option values (command-line options win).",
+        ),
         click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
         click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
         click.option(
@@ -240,7 +312,7 @@ def main():
 
 
 @main.command()
-@click.argument("image")
+@click.argument("image", required=False)
 @common_options
 @click.option(
     "--init",
@@ -256,12 +328,16 @@ def main():
     show_default=True,
     help="Hessian of the Newton step and Daniel's beta.",
 )
-def torus(image, **options):
+@click.pass_context
+def torus(ctx, image, **options):
     """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus."""
     from .outputs import torus_output
     from .torus import DEFAULT_EPSILON, torus_problem
 
     started = time.perf_counter()
+    image = resolve_input(ctx, image)
+    if image is None:
+        raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
         prepare_outputs(options["outputs"], options["checkpoint"])
@@ -327,13 +403,15 @@ def read_torus_init(init, shape):
     help="PNG view: orthographic globe or equirectangular map.",
 )
 @click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees).")
-def sphere(map_source, **options):
+@click.pass_context
+def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
     from .outputs import sphere_output
     from .sphere import DEFAULT_EPSILON, lon_lat, sphere_problem
 
     started = time.perf_counter()
+    map_source = resolve_input(ctx, map_source)
     try:
         settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
         view = parse_view(options["view"])

@@ -1,0 +1,90 @@
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+@pytest.fixture
+def setup(tmp_path):
+    (tmp_path / "inputs").mkdir()
+    Image.fromarray(np.tile(np.arange(0, 240, 15, dtype=np.uint8), (12, 1))).save(tmp_path / "inputs" / "ramp.png")
+    return tmp_path
+
+
+def write_config(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_config_supplies_input_and_options(setup):
+    config = write_config(
+        setup / "job.toml",
+        'input = "inputs/ramp.png"\npoints = 40\nbandwidth = 12\niterations = 3\nquiet = true\noutput = ["dots.csv"]\n',
+    )
+    result = run(["torus", "--config", config])
+    assert result.exit_code == 0, result.output
+    assert len((setup / "dots.csv").read_text().splitlines()) == 41
+
+
+def test_command_line_overrides_config(setup):
+    config = write_config(
+        setup / "job.toml", 'input = "inputs/ramp.png"\npoints = 40\nbandwidth = 12\niterations = 3\nquiet = true\n'
+    )
+    result = run(["torus", "--config", config, "-M", 25, "-o", "-"])
+    assert result.exit_code == 0, result.output
+    assert len(result.stdout.splitlines()) == 26
+
+
+@pytest.mark.parametrize(
+    "line,message",
+    [
+        ("colour = 'red'", "unknown key 'colour'"),
+        ("points = 'many'", "key 'points'"),
+        ("invert = 3", "key 'invert'"),
+        ("points = true", "key 'points'"),
+        ("backend = 'fftw'", "key 'backend'"),
+        ("uniform = true", "unknown key 'uniform'"),
+    ],
+)
+def test_config_errors_name_the_key(setup, line, message):
+    config = write_config(setup / "bad.toml", f'input = "inputs/ramp.png"\n{line}\n')
+    result = run(["torus", "--config", config])
+    assert result.exit_code == 2
+    assert message in result.output
+
+
+def test_broken_toml(setup):
+    config = write_config(setup / "broken.toml", "points = = 3\n")
+    result = run(["torus", "--config", config])
+    assert result.exit_code == 2 and "not valid TOML" in result.output
+
+
+def test_sphere_config_with_builtin(setup):
+    config = write_config(
+        setup / "s.toml", 'input = "builtin:rbf"\npoints = 30\nbandwidth = 6\niterations = 2\nquiet = true\n'
+    )
+    result = run(["sphere", "--config", config])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("lon,lat\n")
+
+
+def test_shipped_configs_parse(monkeypatch):
+    """Every shipped config loads (validation only: zero iterations on a much smaller problem)."""
+    from pathlib import Path
+
+    configs = sorted((Path(__file__).resolve().parents[1] / "configs").glob("*.toml"))
+    assert len(configs) == 7
+    for config in configs:
+        command = (
+            "sphere"
+            if "5.3" in config.name or "5.4" in config.name or "5.5" in config.name or "design" in config.name
+            else "torus"
+        )
+        result = run([command, "--config", config, "-M", 20, "-N", 8, "--iterations", 0, "-q"])
+        assert result.exit_code == 0, (config.name, result.output)
