@@ -78,11 +78,11 @@ def parse_length(text):
     return float(match.group(1)), match.group(2) or "mm"
 
 
-def csv_bytes(columns, names, digits=6):
-    """CSV with a header row; fixed-point numbers so that output is byte-stable."""
+def csv_bytes(columns, names, number_format=".6f"):
+    """CSV with a header row; a fixed number format so that output is byte-stable (".17g" round-trips)."""
     lines = [",".join(names)]
     table = np.column_stack(columns)
-    lines.extend(",".join(f"{value:.{digits}f}" for value in row) for row in table)
+    lines.extend(",".join(format(value, number_format) for value in row) for row in table)
     return ("\n".join(lines) + "\n").encode()
 
 
@@ -222,7 +222,7 @@ def sphere_output(
     longitude, latitude = lon_lat
     if fmt == ".csv":
         if coords == "xyz":
-            return csv_bytes(list(points.T), ["x", "y", "z"], digits=9)
+            return csv_bytes(list(points.T), ["x", "y", "z"], number_format=".17g")
         return csv_bytes([longitude, latitude], ["lon", "lat"])
     if fmt in (".geojson", ".json"):
         return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
