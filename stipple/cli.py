@@ -200,6 +200,7 @@ def common_options(function):
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
+        click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
         click.option(
             "--checkpoint",
             type=click.Path(dir_okay=False),
@@ -354,9 +355,14 @@ def torus(ctx, image, **options):
             hessian=options["hessian"],
         )
         result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
+        points = plot_order(
+            physical_centres(result.points, weights.shape, settings["width"]),
+            result.points,
+            options,
+            settings["width"][1],
+        )
         write_outputs(
-            options["outputs"],
-            lambda fmt: torus_output(result.points, weights.shape, fmt, ink=weights.mean(), **settings),
+            options["outputs"], lambda fmt: torus_output(points, weights.shape, fmt, ink=weights.mean(), **settings)
         )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
@@ -426,11 +432,12 @@ def sphere(ctx, map_source, **options):
             epsilon=options["epsilon"] or DEFAULT_EPSILON,
         )
         result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
-        degrees = lon_lat(result.points)
+        points = plot_order(result.points, result.points, options, "radians")
+        degrees = lon_lat(points)
         write_outputs(
             options["outputs"],
             lambda fmt: sphere_output(
-                result.points,
+                points,
                 degrees,
                 fmt,
                 coords=options["coords"],
@@ -443,6 +450,24 @@ def sphere(ctx, map_source, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+def physical_centres(points, shape, width):
+    """Torus points on the SVG's physical canvas (in the unit of ``width``)."""
+    rows, columns = shape
+    return points * np.array([columns, rows]) * (width[0] / columns)
+
+
+def plot_order(centres, points, options, unit):
+    """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
+    if not options.get("order"):
+        return points
+    from .plotter import plotter_order
+
+    order, before, after = plotter_order(centres)
+    if not options.get("quiet"):
+        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {unit}", err=True)
+    return points[order]
 
 
 def parse_view(text):
@@ -488,3 +513,181 @@ def read_sphere_init(init):
         if "expected CSV columns" not in str(error):
             raise
     return read_points_csv(init, ("x", "y", "z"))
+
+
+def read_points(source):
+    """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``."""
+    from .inputs import read_points_csv, read_source
+    from .sphere import from_lon_lat
+
+    data = read_source(sys.stdin.buffer if source == "-" else source)
+    header = data.split(b"\n", 1)[0].decode("utf-8", errors="replace").replace(" ", "").lower()
+
+    def table(names):
+        stream = io.BytesIO(data)
+        stream.name = "<stdin>" if source == "-" else source
+        return read_points_csv(stream, names)
+
+    if header.startswith("x,y,z"):
+        points = table(("x", "y", "z"))
+        return "sphere", points / np.linalg.norm(points, axis=1, keepdims=True)
+    if header.startswith("x,y"):
+        return "torus", table(("x", "y"))
+    if header.startswith("lon,lat"):
+        longitude, latitude = table(("lon", "lat")).T
+        return "sphere", from_lon_lat(longitude, latitude)
+    raise StippleError(f"{source}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+
+
+def parse_size(text):
+    try:
+        width, height = (int(part) for part in text.lower().replace("x", ",").split(","))
+    except ValueError:
+        raise StippleError(f"size must be WIDTH,HEIGHT in pixels, not {text!r}") from None
+    if width < 1 or height < 1:
+        raise StippleError(f"size must be positive, not {text!r}")
+    return height, width
+
+
+@main.command()
+@click.argument("points_source", metavar="POINTS")
+@click.option(
+    "-o",
+    "--output",
+    "outputs",
+    multiple=True,
+    default=("-",),
+    show_default=True,
+    help="Output (.csv .svg .png .geojson); repeatable; '-' is CSV on stdout.",
+)
+@click.option("--like", default=None, help="Torus: the input image, for its size and mean tone.")
+@click.option("--size", default=None, help="Torus: WIDTH,HEIGHT of the input in pixels (default: from the points).")
+@click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px).")
+@click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm.")
+@click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels.")
+@click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters).")
+@click.option(
+    "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="Sphere CSV columns."
+)
+@click.option(
+    "--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True, help="Sphere PNG view."
+)
+@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
+@click.option("-q", "--quiet", is_flag=True, help="No log lines.")
+def render(points_source, outputs, like, size, width, dot_radius, png_width, order, coords, projection, view, quiet):
+    """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
+    from .outputs import sphere_output, torus_output
+    from .sphere import lon_lat
+
+    options = {"order": order, "quiet": quiet}
+    try:
+        settings = render_settings(width, dot_radius, png_width)
+        prepare_outputs(outputs, None)
+        domain, points = read_points(points_source)
+        if domain == "sphere":
+            points = plot_order(points, points, options, "radians")
+            angles, degrees = parse_view(view), lon_lat(points)
+            write_outputs(
+                outputs,
+                lambda fmt: sphere_output(
+                    points, degrees, fmt, coords=coords, projection=projection, view=angles, **settings
+                ),
+            )
+            return
+        ink = None
+        if like is not None:
+            weights = load_input(like)
+            shape, ink = weights.shape, weights.mean()
+        elif size is not None:
+            shape = parse_size(size)
+        else:
+            shape = (int(np.ceil(points[:, 1].max(initial=1))), int(np.ceil(points[:, 0].max(initial=1))))
+        unit = points / np.array([shape[1], shape[0]])
+        unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
+        write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, ink=ink, **settings))
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+
+
+@main.command()
+@click.argument("points_source", metavar="POINTS")
+@click.argument("input_source", metavar="INPUT", required=False)
+@click.option("-N", "--bandwidth", type=int, default=None, help="Bandwidth of E_N (default: as stipple would use).")
+@click.option("--uniform", is_flag=True, help="Sphere: against w ≡ 1 (no INPUT).")
+@click.option("--kernel", default="distance", show_default=True, help="Sphere kernel of E_N.")
+@click.option("--lon0", type=float, default=0.0, show_default=True, help="Sphere maps: first column's longitude.")
+@click.option("--invert", is_flag=True, help="As for the run.")
+@click.option("--gamma", type=float, default=1.0, show_default=True, help="As for the run.")
+@click.option("--range", "value_range", type=(float, float), default=None, help="As for the run.")
+@click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
+@click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
+def evaluate(
+    points_source, input_source, bandwidth, uniform, kernel, lon0, invert, gamma, value_range, json_path, spectrum_path
+):
+    """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform)."""
+    import json
+
+    from .evaluate import evaluate_sphere, evaluate_torus
+    from .outputs import spectrum_plot
+
+    options = {"uniform": uniform, "invert": invert, "gamma": gamma, "value_range": value_range, "lon0": lon0}
+    try:
+        if json_path not in (None, "-"):
+            check_writable(json_path)
+        if spectrum_path is not None:
+            check_writable(spectrum_path)
+        domain, points = read_points(points_source)
+        if domain == "torus":
+            from .torus import torus_problem
+
+            if input_source is None:
+                raise StippleError("missing INPUT: the image or map the points were made from")
+            weights = load_input(input_source, invert=invert, gamma=gamma, value_range=value_range)
+            unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
+            problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10)
+            report = evaluate_torus(problem, unit, weights)
+        else:
+            from .sphere import sphere_problem
+
+            density = load_sphere_density(input_source, options)
+            problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
+            report = evaluate_sphere(problem, points, density)
+        if spectrum_path is not None and "spectrum" in report:
+            spectrum = report["spectrum"]
+            emit_file(spectrum_path, spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"]))
+        if json_path is not None:
+            emit_file(json_path, (json.dumps(report, indent=2) + "\n").encode())
+        if json_path != "-":
+            click.echo(format_report(report))
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+
+
+def emit_file(path, data):
+    from .outputs import atomic_write
+
+    if path == "-":
+        sys.stdout.buffer.write(data)
+    else:
+        atomic_write(path, data)
+
+
+def format_report(report):
+    """The evaluation as aligned ``name: value`` lines (the spectrum only as its range)."""
+    lines = [
+        f"domain: {report['domain']}",
+        f"points: {report['points']}",
+        f"bandwidth: {report['bandwidth']}",
+        f"E_N: {report['energy']:.6e}",
+        f"E_N of i.i.d. samples (expected): {report['expected_iid_energy']:.6e}",
+        f"ratio to i.i.d.: {report['energy_ratio_to_iid']:.4g}",
+    ]
+    for item in report.get("similarity", []):
+        lines.append(f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f}")
+    if "neighbour_distance_over_hexagonal" in report:
+        stats = report["neighbour_distance_over_hexagonal"]
+        lines.append("nearest neighbour / hexagonal spacing: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+    for key in ("max_coefficient_error", "minimum_separation_degrees", "cap_discrepancy"):
+        if key in report:
+            lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
+    return "\n".join(lines)

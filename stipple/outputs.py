@@ -259,3 +259,29 @@ def _globe_background(canvas):
         (half * 0.02, half * 0.02, ORTHO_SIZE - half * 0.02, ORTHO_SIZE - half * 0.02), fill=235
     )
     return image
+
+
+def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
+    """PNG bytes of two stacked line plots: radially averaged power and anisotropy (dB) against frequency."""
+    width, height = size
+    image = Image.new("L", size, 255)
+    draw = ImageDraw.Draw(image)
+    panels = [
+        ("radially averaged power", np.asarray(power, dtype=float)),
+        ("anisotropy (dB)", np.asarray([np.nan if a is None else a for a in anisotropy], dtype=float)),
+    ]
+    x = np.asarray(frequencies, dtype=float)
+    for index, (title, values) in enumerate(panels):
+        top = 20 + index * height // 2
+        box = (60, top + 20, width - 20, top + height // 2 - 40)
+        draw.rectangle(box, outline=0)
+        finite = values[np.isfinite(values)]
+        low, high = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+        high = high if high > low else low + 1
+        px = box[0] + (x - x.min()) / max(np.ptp(x), 1) * (box[2] - box[0])
+        py = box[3] - (values - low) / (high - low) * (box[3] - box[1])
+        keep = np.isfinite(py)
+        draw.line(list(zip(px[keep], py[keep], strict=True)), fill=0, width=1)
+        draw.text((box[0], top), f"{title}: {low:.3g} .. {high:.3g}", fill=0)
+        draw.text((box[0], box[3] + 4), f"frequency {x.min():g} .. {x.max():g}", fill=0)
+    return png_bytes(image)

@@ -71,6 +71,14 @@ class CellMap:
         leg = (ring_weights[:, :, None] * (row_spectra * phase)[:, None, :]).reshape(1, -1, lmax + 1)
         return ducc0.sht.leg2alm(leg=leg, lmax=lmax, theta=theta.ravel(), spin=0, nthreads=threads)[0]
 
+    def centres_and_masses(self):
+        """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
+        rows, columns = self.values.shape
+        theta = (np.arange(rows) + 0.5) * np.pi / rows
+        phi = np.radians(self.lon0) + (np.arange(columns) + 0.5) * 2 * np.pi / columns
+        centres = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
+        return centres.reshape(-1, 3), (self.values * self.cell_areas).ravel()
+
     def sample(self, rng, count):
         """I.i.d. points from the cell-constant density: a cell by its mass, then uniform in area."""
         rows, columns = self.values.shape
@@ -100,7 +108,7 @@ class AnalyticDensity:
 
     @property
     def mean(self):
-        return float(self._cell_map().mean)
+        return float(self.cell_map().mean)
 
     def coefficients(self, lmax, threads=1):
         """``w_nm`` by Gauss-Legendre quadrature on a grid of degree ``2 lmax`` (at least 512)."""
@@ -112,7 +120,8 @@ class AnalyticDensity:
         weighted = values * _gauss_weights(len(theta))[:, None] * 2 * np.pi / len(phi)
         return ducc0.sht.adjoint_synthesis_2d(map=weighted[None], lmax=lmax, spin=0, geometry="GL", nthreads=threads)[0]
 
-    def _cell_map(self):
+    def cell_map(self):
+        """The density on a 0.5° cell grid (for sampling starts and cap masses)."""
         rows = 360
         latitudes = (np.arange(rows) + 0.5) * np.pi / rows
         longitudes = (np.arange(2 * rows) + 0.5) * np.pi / rows
@@ -121,7 +130,7 @@ class AnalyticDensity:
 
     def sample(self, rng, count):
         """Approximately i.i.d. from the density (its values on a 0.5° grid), good for a start."""
-        return self._cell_map().sample(rng, count)
+        return self.cell_map().sample(rng, count)
 
 
 def _gauss_weights(rings):

@@ -1,0 +1,197 @@
+"""Quality measures of a point set against its density.
+
+All formulas are documented in the README ("Evaluating point sets"); in short:
+
+* ``E_N`` — the bandlimited quadrature error of the problem's own kernel at the points.
+* ``E_N`` of i.i.d. samples — exactly ``lam^2 M sum_l mult_l k_l (E|psi_l(X)|^2 - |w_l/m|^2)`` for ``X ~ w/m``:
+  ``E|psi_l|^2 = 1`` on the torus and ``sum_m mult |Y_nm|^2 = (2n+1)/(4 pi)`` on the sphere (addition theorem).
+* Torus images: PSNR and SSIM between the density and the dots' density (one dot carries mass ``m/M``), both
+  blurred by a periodic Gaussian of ``sigma`` pixels; nearest-neighbour distances relative to a hexagonal
+  packing of the local density, ``d_hex = sqrt(2 / (sqrt(3) rho))``; the radially averaged power spectrum
+  ``P(f) = |sum_i exp(-2 pi i n.x_i)|^2 / M`` over annuli ``|n| in [f, f+1)`` and its anisotropy
+  ``10 log10(var / mean^2)`` in dB.
+* Sphere: the minimum geodesic separation, and a spherical-cap discrepancy estimate
+  ``max |#(points in cap)/M - w(cap)/m|`` over caps with 500 Fibonacci centres and 90 radii.
+"""
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+BLURS = (1.0, 2.0, 4.0)
+# E|psi_l(X)|^2 as it enters sums whose weights depend on the degree only: 1 on the torus (|psi| = 1); on the
+# sphere sum_m mult |Y_nm|^2 = (2n+1)/(4 pi) everywhere (addition theorem), i.e. 1/(4 pi) per stored order.
+BASIS_SQUARE = {"torus": 1.0, "sphere": 1 / (4 * np.pi)}
+
+
+def discrepancy_energy(problem, points):
+    """``E_N`` of ``points`` for the problem's kernel and density."""
+    problem.objective.set_points(points)
+    return problem.objective.energy()
+
+
+def expected_iid_energy(problem):
+    """Exact expectation of ``E_N`` for ``M`` i.i.d. points drawn from the density."""
+    objective = problem.objective
+    mass = objective.weight * problem.n_points
+    normalised = objective.target / mass
+    variance = BASIS_SQUARE[problem.domain] - np.abs(normalised) ** 2
+    return float(objective.weight**2 * problem.n_points * np.sum(objective.energy_weights * variance))
+
+
+def periodic_blur(image, sigma):
+    return ndimage.gaussian_filter(image, sigma, mode="wrap")
+
+
+def dot_density(points, shape, mass):
+    """Dots binned on the pixel grid, each carrying ``mass / M`` (same units as the density)."""
+    rows, columns = shape
+    column = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
+    row = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
+    counts = np.bincount(row * columns + column, minlength=rows * columns).reshape(shape)
+    return counts * (mass * rows * columns / len(points))
+
+
+def psnr(reference, test):
+    error = np.mean((reference - test) ** 2)
+    peak = reference.max()
+    return float("inf") if error == 0 else float(10 * np.log10(peak**2 / error))
+
+
+def ssim(reference, test, data_range=1.0, sigma=1.5):
+    """Structural similarity (Wang et al. 2004) with a Gaussian window, K1 = 0.01, K2 = 0.03."""
+    c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+    mu_x, mu_y = (ndimage.gaussian_filter(image, sigma, mode="wrap") for image in (reference, test))
+    var_x = ndimage.gaussian_filter(reference * reference, sigma, mode="wrap") - mu_x**2
+    var_y = ndimage.gaussian_filter(test * test, sigma, mode="wrap") - mu_y**2
+    cov = ndimage.gaussian_filter(reference * test, sigma, mode="wrap") - mu_x * mu_y
+    index = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / ((mu_x**2 + mu_y**2 + c1) * (var_x + var_y + c2))
+    return float(index.mean())
+
+
+def image_similarity(weights, points, blurs=BLURS):
+    """PSNR and SSIM between the blurred density and the blurred dot density, per blur width (pixels)."""
+    dots = dot_density(points, weights.shape, weights.mean())
+    results = []
+    for sigma in blurs:
+        reference, test = periodic_blur(weights, sigma), periodic_blur(dots, sigma)
+        results.append({"sigma": sigma, "psnr": psnr(reference, test), "ssim": ssim(reference, test)})
+    return results
+
+
+def torus_neighbour_ratios(points, weights):
+    """Nearest-neighbour distance over the hexagonal spacing of the local density, for every point."""
+    rows, columns = weights.shape
+    scale = np.array([columns, rows]) / max(rows, columns)
+    physical = points * scale
+    tree = cKDTree(np.mod(physical, scale), boxsize=scale)
+    distances, _ = tree.query(np.mod(physical, scale), k=2)
+    column = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
+    row = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
+    area = scale[0] * scale[1]
+    density = len(points) * weights[row, column] / (weights.mean() * area)
+    with np.errstate(divide="ignore"):
+        hexagonal = np.sqrt(2 / (np.sqrt(3) * density))
+    return distances[:, 1] / hexagonal
+
+
+def summary(values):
+    values = values[np.isfinite(values)]
+    return {
+        "min": float(values.min()),
+        "p05": float(np.percentile(values, 5)),
+        "median": float(np.median(values)),
+        "mean": float(values.mean()),
+    }
+
+
+def power_spectrum(problem, points, max_frequency=None):
+    """Radially averaged periodogram and anisotropy (dB) over integer annuli of the mode grid."""
+    fourier = problem.objective.fourier
+    fourier.set_points(points)
+    coeffs = fourier.analysis()
+    n1, n2 = fourier.modes
+    radius = np.hypot(n1, n2)
+    limit = max_frequency or int(min(n1.max(), n2.max()))
+    periodogram = np.abs(coeffs) ** 2 / len(points)
+    frequencies, means, anisotropy = [], [], []
+    for f in range(1, limit):
+        ring = periodogram[(radius >= f) & (radius < f + 1)]
+        if ring.size == 0:
+            continue
+        frequencies.append(f)
+        means.append(float(ring.mean()))
+        anisotropy.append(float(10 * np.log10(ring.var() / ring.mean() ** 2)) if ring.mean() > 0 else None)
+    return {"frequency": frequencies, "power": means, "anisotropy_db": anisotropy}
+
+
+def fibonacci_sphere(count):
+    index = np.arange(count) + 0.5
+    z = 1 - 2 * index / count
+    phi = np.pi * (1 + np.sqrt(5)) * index
+    radius = np.sqrt(1 - z**2)
+    return np.stack([radius * np.cos(phi), radius * np.sin(phi), z], axis=1)
+
+
+def minimum_separation(points):
+    """Smallest geodesic distance (radians) between two points."""
+    distances, _ = cKDTree(points).query(points, k=2)
+    chord = distances[:, 1].min()
+    return float(2 * np.arcsin(min(chord / 2, 1.0)))
+
+
+def cap_discrepancy(points, cell_centres, cell_masses, centres=500, radii=90):
+    """``max |fraction of points in cap - fraction of mass in cap|`` over a grid of caps."""
+    directions = fibonacci_sphere(centres)
+    heights = np.cos(np.linspace(0, np.pi, radii + 2)[1:-1])
+    worst = 0.0
+    mass_fraction = cell_masses / cell_masses.sum()
+    for direction in directions:
+        point_heights = np.sort(points @ direction)
+        order = np.argsort(cell_centres @ direction)
+        cell_heights = (cell_centres @ direction)[order]
+        cumulative_mass = np.concatenate([[0.0], np.cumsum(mass_fraction[order])])
+        # Cap {x : x . direction >= h}: everything above height h.
+        points_above = 1 - np.searchsorted(point_heights, heights, side="left") / len(points)
+        mass_above = 1 - cumulative_mass[np.searchsorted(cell_heights, heights, side="left")]
+        worst = max(worst, float(np.abs(points_above - mass_above).max()))
+    return worst
+
+
+def evaluate_torus(problem, points, weights):
+    """All torus measures as a dict (see the module docstring)."""
+    energy = discrepancy_energy(problem, points)
+    expected = expected_iid_energy(problem)
+    report = {
+        "domain": "torus",
+        "points": len(points),
+        "bandwidth": problem.bandwidth,
+        "energy": energy,
+        "expected_iid_energy": expected,
+        "energy_ratio_to_iid": energy / expected,
+        "similarity": image_similarity(weights, points),
+        "neighbour_distance_over_hexagonal": summary(torus_neighbour_ratios(points, weights)),
+    }
+    report["spectrum"] = power_spectrum(problem, points)
+    report["flat_input"] = bool(np.ptp(weights) <= 1e-12 * max(weights.max(), 1e-300))
+    return report
+
+
+def evaluate_sphere(problem, points, density):
+    """All sphere measures as a dict (see the module docstring)."""
+    from .sphere import CellMap
+
+    expected = expected_iid_energy(problem)
+    cells = density if isinstance(density, CellMap) else density.cell_map()
+    problem.objective.set_points(points)
+    return {
+        "domain": "sphere",
+        "points": len(points),
+        "bandwidth": problem.bandwidth,
+        "energy": problem.objective.energy(),
+        "expected_iid_energy": expected,
+        "energy_ratio_to_iid": problem.objective.energy() / expected,
+        "max_coefficient_error": float(np.abs(problem.objective._residual[1:]).max()),
+        "minimum_separation_degrees": float(np.degrees(minimum_separation(points))),
+        "cap_discrepancy": cap_discrepancy(points, *cells.centres_and_masses()),
+    }

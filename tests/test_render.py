@@ -1,0 +1,121 @@
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+from stipple.plotter import greedy_order, path_length, plotter_order, two_opt
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(args, **kwargs):
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+
+
+@pytest.fixture
+def torus_csv(tmp_path):
+    image = tmp_path / "ramp.png"
+    Image.fromarray(np.tile(np.arange(0, 240, 10, dtype=np.uint8), (16, 1))).save(image)
+    points = tmp_path / "dots.csv"
+    assert run(["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "-q", "-o", points]).exit_code == 0
+    return image, points
+
+
+def test_render_reproduces_the_run_outputs(torus_csv, tmp_path):
+    image, points = torus_csv
+    direct = tmp_path / "direct.svg"
+    run(["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "-q", "-o", direct])
+    rendered = tmp_path / "rendered.svg"
+    result = run(["render", points, "--like", image, "-o", rendered, "-o", tmp_path / "r.png"])
+    assert result.exit_code == 0, result.output
+
+    def circles(path):
+        import re
+
+        return np.array(re.findall(r'cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"', path.read_text()), dtype=float)
+
+    np.testing.assert_allclose(circles(rendered), circles(direct), atol=2e-4)
+    assert Image.open(tmp_path / "r.png").size == (1024, 683)
+
+
+def test_render_from_stdin_with_size(torus_csv):
+    _, points = torus_csv
+    result = run(["render", "-", "--size", "24,16", "-o", "-"], input=points.read_text())
+    assert result.exit_code == 0 and result.stdout == points.read_text()
+
+
+def test_render_sphere_points(tmp_path):
+    points = tmp_path / "globe.csv"
+    run(["sphere", "builtin:gaussians", "-M", 100, "-N", 8, "--iterations", 3, "-q", "-o", points])
+    result = run(
+        ["render", points, "-o", tmp_path / "g.geojson", "-o", tmp_path / "g.svg", "--coords", "xyz", "-o", "-"]
+    )
+    assert result.exit_code == 0, result.output
+    xyz = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")
+    np.testing.assert_allclose(np.linalg.norm(xyz, axis=1), 1, atol=1e-6)
+    assert '"MultiPoint"' in (tmp_path / "g.geojson").read_text()
+
+
+def test_render_rejects_unknown_csv(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    result = run(["render", bad])
+    assert result.exit_code == 1 and "expected a CSV with header" in result.output
+
+
+def test_order_shortens_the_pen_path(torus_csv, tmp_path):
+    image, _ = torus_csv
+    result = run(["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "--order", "-o", tmp_path / "o.csv"])
+    assert result.exit_code == 0
+    line = [text for text in result.output.splitlines() if "pen-up travel" in text][0]
+    before, after = (float(value) for value in line.split("travel ")[1].split(" mm")[0].split(" -> "))
+    assert after < 0.2 * before
+
+
+def test_two_opt_improves_greedy_and_keeps_every_dot(rng):
+    centres = rng.random((600, 2))
+    greedy = greedy_order(centres)
+    improved = two_opt(centres, greedy)
+    assert sorted(improved) == list(range(600))
+    assert path_length(centres[improved]) < path_length(centres[greedy])
+    order, before, after = plotter_order(centres)
+    assert after == pytest.approx(path_length(centres[order])) and after < before / 5
+
+
+def test_two_opt_untangles_a_crossing():
+    square = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0], [0.0, 2.0]])
+    order = two_opt(square, np.arange(5))
+    assert path_length(square[order]) < path_length(square)
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
+def test_makefile_example_on_two_images(tmp_path):
+    images = tmp_path / "images"
+    images.mkdir()
+    for name, level in (("a.png", 60), ("b.jpg", 160)):
+        picture = np.full((12, 18), 255, dtype=np.uint8)
+        picture[:, :9] = level
+        Image.fromarray(picture).save(images / name)
+    command = [
+        "make",
+        "-f",
+        str(ROOT / "examples" / "Makefile"),
+        "-j2",
+        f"IMAGES={images}",
+        f"OUT={tmp_path / 'svg'}",
+        f"STIPPLE={sys.executable} -m stipple",
+        "POINTS=150",
+        "OPTIONS=-N 16 --iterations 5 --order --quiet",
+    ]
+    result = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    for name in ("a.svg", "b.svg"):
+        assert (tmp_path / "svg" / name).read_text().count("<circle") == 150
+    again = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path)
+    assert "Nothing to be done" in again.stdout or again.stdout.strip() == "" or "is up to date" in again.stdout
