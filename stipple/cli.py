@@ -268,8 +268,16 @@ def solve(problem, options, init):
     from .halftone import run
 
     seconds, iterations = parse_every(options["checkpoint_every"])
-    if options["verbose"] and not options["quiet"]:
-        click.echo(f"stipple: {problem.domain}, M={problem.n_points}, N={problem.bandwidth}", err=True)
+    verbose = options["verbose"] and not options["quiet"]
+    if verbose:
+        fourier = problem.objective.fourier
+        transforms = getattr(fourier, "nufft", fourier)
+        details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
+        click.echo(
+            f"stipple: {details}, threads={transforms.threads}, epsilon={transforms.epsilon:g}, "
+            f"tol={options['tol']:g}, iterations<={options['iterations']}",
+            err=True,
+        )
     progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
     with Interruption() as interruption:
         try:
@@ -288,6 +296,13 @@ def solve(problem, options, init):
             )
         finally:
             progress.close()
+    if verbose and len(result.energies) > 1:
+        rises = int(np.sum(np.diff(result.energies) > 0))
+        click.echo(
+            f"stipple: {result.seconds / max(result.iterations, 1) * 1000:.1f} ms per iteration, "
+            f"energy {result.energies[0]:.4e} -> {result.energy:.4e} ({rises} rises)",
+            err=True,
+        )
     return result, interruption.signal
 
 

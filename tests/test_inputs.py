@@ -1,0 +1,92 @@
+"""Image and map loading: formats, bit depths, alpha, orientation, density conventions."""
+
+import io
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from stipple.inputs import load_density
+
+
+def saved(image, fmt, **kwargs):
+    buffer = io.BytesIO()
+    image.save(buffer, format=fmt, **kwargs)
+    buffer.seek(0)
+    buffer.name = f"test.{fmt.lower()}"
+    return buffer
+
+
+GRAY = np.array([[0, 64], [128, 255]], dtype=np.uint8)
+
+
+@pytest.mark.parametrize("fmt", ["PNG", "TIFF", "BMP"])
+def test_lossless_8bit_gray(fmt):
+    density = load_density(saved(Image.fromarray(GRAY), fmt))
+    np.testing.assert_allclose(density, 1 - GRAY / 255)
+
+
+def test_jpeg_is_close():
+    picture = np.repeat(np.repeat(GRAY, 8, axis=0), 8, axis=1)
+    density = load_density(saved(Image.fromarray(picture), "JPEG", quality=95))
+    np.testing.assert_allclose(density, 1 - picture / 255, atol=0.03)
+
+
+def test_16bit_png_keeps_precision():
+    values = np.array([[0, 1000], [40000, 65535]], dtype=np.uint16)
+    density = load_density(saved(Image.fromarray(values), "PNG"))
+    np.testing.assert_allclose(density, 1 - values / 65535, atol=1e-12)
+
+
+def test_rgb_uses_luma():
+    rgb = np.zeros((2, 2, 3), dtype=np.uint8)
+    rgb[0, 0] = [255, 0, 0]
+    rgb[0, 1] = [0, 255, 0]
+    rgb[1, 0] = [0, 0, 255]
+    rgb[1, 1] = [255, 255, 255]
+    density = load_density(saved(Image.fromarray(rgb), "PNG"))
+    np.testing.assert_allclose(density, 1 - np.array([[0.299, 0.587], [0.114, 1.0]]), atol=1e-12)
+
+
+def test_transparent_pixels_are_white_paper():
+    rgba = np.zeros((2, 2, 4), dtype=np.uint8)
+    rgba[..., 3] = [[0, 255], [128, 255]]
+    density = load_density(saved(Image.fromarray(rgba), "PNG"))
+    np.testing.assert_allclose(density, [[0, 1], [128 / 255, 1]], atol=1e-12)
+
+
+def test_palette_and_bilevel_images():
+    palette = Image.fromarray(GRAY).convert("P")
+    np.testing.assert_allclose(load_density(saved(palette, "PNG")), 1 - GRAY / 255, atol=1e-12)
+    bilevel = Image.fromarray(GRAY).convert("1")
+    assert set(np.unique(load_density(saved(bilevel, "PNG")))) <= {0.0, 1.0}
+
+
+def test_exif_orientation_is_applied():
+    picture = np.zeros((2, 3), dtype=np.uint8)
+    picture[0, 0] = 255
+    image = Image.fromarray(picture)
+    exif = Image.Exif()
+    exif[0x0112] = 6  # rotate 90° clockwise for display
+    density = load_density(saved(image, "JPEG", exif=exif.tobytes(), quality=100))
+    assert density.shape == (3, 2)
+
+
+def test_rectangular_aspect_is_kept():
+    density = load_density(saved(Image.new("L", (40, 10), 0), "PNG"))
+    assert density.shape == (10, 40)
+
+
+def test_invert_and_gamma():
+    source = saved(Image.fromarray(GRAY), "PNG")
+    inverted = load_density(source, invert=True, gamma=2.0)
+    np.testing.assert_allclose(inverted, (GRAY / 255) ** 2)
+
+
+def test_npy_maps_rescale_linearly_with_an_override_range():
+    values = np.array([[-100.0, 0.0], [50.0, 100.0]])
+    buffer = io.BytesIO()
+    np.save(buffer, values)
+    data = buffer.getvalue()
+    np.testing.assert_allclose(load_density(io.BytesIO(data)), [[0, 0.5], [0.75, 1]])
+    np.testing.assert_allclose(load_density(io.BytesIO(data), value_range=(0, 50)), [[0, 0], [1, 1]])
