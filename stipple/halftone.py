@@ -2,12 +2,12 @@
 
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from .errors import StippleError
-from .optimize import initial_state, minimize
+from .optimize import OptimizeResult, initial_state, minimize
 
 MAX_POINTS = 20_000_000
 MAX_BANDWIDTH = 8192
@@ -32,24 +32,10 @@ class Problem:
 
 
 @dataclass
-class HalftoneResult:
-    """Points and how the run went (see ``stipple.optimize.OptimizeResult`` for the fields)."""
+class HalftoneResult(OptimizeResult):
+    """An ``OptimizeResult`` (points, status, message, history, final state) and the bandwidth used."""
 
-    points: np.ndarray
-    status: str
-    message: str
-    iterations: int
-    energy: float
-    relative_gradient_norm: float
-    energies: np.ndarray
-    gradient_norms: np.ndarray
-    seconds: float
-    bandwidth: int
-    state: object
-
-    @property
-    def success(self):
-        return self.status in ("converged", "max_iterations", "time_limit")
+    bandwidth: int = 0
 
 
 def default_threads():
@@ -172,17 +158,7 @@ def run(
     if saver is not None:
         saver.save(outcome.state)
     return HalftoneResult(
-        points=outcome.points,
-        status=outcome.status,
-        message=outcome.message,
-        iterations=outcome.iterations,
-        energy=outcome.energy,
-        relative_gradient_norm=outcome.relative_gradient_norm,
-        energies=outcome.energies,
-        gradient_norms=outcome.gradient_norms,
-        seconds=outcome.seconds,
-        bandwidth=problem.bandwidth,
-        state=outcome.state,
+        **{item.name: getattr(outcome, item.name) for item in fields(outcome)}, bandwidth=problem.bandwidth
     )
 
 
