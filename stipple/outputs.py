@@ -262,12 +262,14 @@ def _globe_background(canvas):
 
 
 def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
-    """PNG bytes of two stacked line plots: radially averaged power and anisotropy (dB) against frequency."""
+    """PNG bytes of two stacked line plots: log10 radially averaged power and anisotropy (dB) by frequency."""
     width, height = size
     image = Image.new("L", size, 255)
     draw = ImageDraw.Draw(image)
+    with np.errstate(divide="ignore"):
+        log_power = np.log10(np.asarray(power, dtype=float))
     panels = [
-        ("radially averaged power", np.asarray(power, dtype=float)),
+        ("log10 radially averaged power", np.where(np.isfinite(log_power), log_power, np.nan)),
         ("anisotropy (dB)", np.asarray([np.nan if a is None else a for a in anisotropy], dtype=float)),
     ]
     x = np.asarray(frequencies, dtype=float)
