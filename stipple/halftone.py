@@ -43,29 +43,31 @@ def default_threads():
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
+def check_integer(name, value, low, high, *, even=False):
+    """``value`` as an int if it is an integer in [low, high] (and even, if asked), else a StippleError."""
+    integer = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if not integer or not low <= value <= high or (even and value % 2):
+        kind = "an even integer" if even else "an integer"
+        raise StippleError(f"{name} must be {kind} in [{low}, {high}], not {value!r}")
+    return int(value)
+
+
 def check_count(n_points):
-    if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)) or not 1 <= n_points <= MAX_POINTS:
-        raise StippleError(f"number of points must be an integer in [1, {MAX_POINTS}], not {n_points!r}")
-    return int(n_points)
+    return check_integer("number of points", n_points, 1, MAX_POINTS)
 
 
 def check_threads(threads):
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not 1 <= threads <= 1024:
-        raise StippleError(f"threads must be an integer in [1, 1024], not {threads!r}")
-    return int(threads)
+    return check_integer("threads", threads, 1, 1024)
+
+
+def check_bandwidth(bandwidth):
+    return check_integer("bandwidth", bandwidth, 2, MAX_BANDWIDTH, even=True)
 
 
 def check_epsilon(epsilon):
     if not isinstance(epsilon, (int, float, np.floating)) or not 1e-14 <= epsilon <= 1e-2:
         raise StippleError(f"epsilon must be a number in [1e-14, 1e-2], not {epsilon!r}")
     return float(epsilon)
-
-
-def check_bandwidth(bandwidth):
-    valid = isinstance(bandwidth, (int, np.integer)) and not isinstance(bandwidth, bool)
-    if not valid or not 2 <= bandwidth <= MAX_BANDWIDTH or bandwidth % 2:
-        raise StippleError(f"bandwidth must be an even integer in [2, {MAX_BANDWIDTH}], not {bandwidth!r}")
-    return int(bandwidth)
 
 
 def check_positive(name, value, allow_none=False):
@@ -130,8 +132,7 @@ def run(
 
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
-    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
-        raise StippleError(f"iterations must be a non-negative integer, not {iterations!r}")
+    check_integer("iterations", iterations, 0, 10**9)
     saver = None
     if checkpoint is not None:
         if not resume and os.path.exists(checkpoint):

@@ -4,7 +4,16 @@ import numpy as np
 from scipy.special import roots_legendre
 
 from .errors import StippleError
-from .halftone import MAX_BANDWIDTH, Problem, check_count, check_epsilon, check_threads, default_threads, run
+from .halftone import (
+    MAX_BANDWIDTH,
+    Problem,
+    check_count,
+    check_epsilon,
+    check_integer,
+    check_threads,
+    default_threads,
+    run,
+)
 from .inputs import check_grid
 from .kernels import sphere_kernel
 from .manifolds import Sphere
@@ -21,10 +30,7 @@ def default_bandwidth(n_points):
 
 
 def check_degree(bandwidth):
-    valid = isinstance(bandwidth, (int, np.integer)) and not isinstance(bandwidth, bool)
-    if not valid or not 1 <= bandwidth <= MAX_BANDWIDTH:
-        raise StippleError(f"bandwidth (degree) must be an integer in [1, {MAX_BANDWIDTH}], not {bandwidth!r}")
-    return int(bandwidth)
+    return check_integer("bandwidth (degree)", bandwidth, 1, MAX_BANDWIDTH)
 
 
 class CellMap:
