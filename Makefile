@@ -16,9 +16,11 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	mkdir -p out
-	$(BIN)/stipple torus samples/astronaut256.png -M 30150 -N 650 --tol 1e-3 \
+	$(BIN)/stipple torus samples/astronaut256.png -M 30150 \
 		-o out/astronaut.csv -o out/astronaut.svg -o out/astronaut.png
-	@echo "wrote out/astronaut.csv out/astronaut.svg out/astronaut.png"
+	$(BIN)/stipple sphere --config configs/fig5.5.toml --dot-radius 1.5mm \
+		-o out/rbf-nodes.csv -o out/rbf-nodes.png -o out/rbf-nodes.geojson
+	@echo "wrote out/astronaut.{csv,svg,png} and out/rbf-nodes.{csv,png,geojson}"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

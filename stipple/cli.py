@@ -177,7 +177,12 @@ def common_options(function):
         ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
-        click.option("--threads", type=int, default=None, help="Transform threads (default: see README)."),
+        click.option(
+            "--threads",
+            type=int,
+            default=None,
+            help="Transform threads (default: torus 1, bit-reproducible; sphere all CPUs).",
+        ),
         click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
         click.option("--invert", is_flag=True, help="Images: w = u (white dots on black); maps: w = 1 - map."),
         click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
