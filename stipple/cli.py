@@ -16,6 +16,7 @@ import click
 import numpy as np
 
 from . import __version__
+from .config import load_config
 from .errors import StippleError
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_writable, output_format, parse_length
@@ -82,65 +83,6 @@ def parse_every(text):
             raise StippleError(f"checkpoint-every must be a whole number of iterations, not {text!r}")
         return None, int(value)
     return value * {"s": 1, "m": 60, "h": 3600}[unit], None
-
-
-CONFIG_ALIASES = {"points": "n_points", "output": "outputs", "range": "value_range", "input": None}
-PATH_KEYS = ("outputs", "init", "checkpoint")
-
-
-def load_config(ctx, param, value):
-    """Read ``--config FILE.toml`` into the command's defaults (options on the command line win).
-
-    Keys are the long option names (``points``, ``bandwidth``, ``tol``, ``output``, ...) and ``input`` for
-    the IMAGE/MAP argument; relative paths are relative to the config file. Unknown keys and values
-    of the wrong type are errors naming the key.
-    """
-    if value is None:
-        return None
-    import tomllib
-
-    try:
-        with open(value, "rb") as stream:
-            table = tomllib.load(stream)
-    except OSError as error:
-        raise click.BadParameter(f"cannot read {value}: {error.strerror}", ctx, param) from None
-    except tomllib.TOMLDecodeError as error:
-        raise click.BadParameter(f"{value} is not valid TOML: {error}", ctx, param) from None
-    base = os.path.dirname(os.path.abspath(value))
-    parameters = {p.name: p for p in ctx.command.params if p.name != "config"}
-    defaults = {}
-    for key, item in table.items():
-        name = CONFIG_ALIASES.get(key, key.replace("-", "_"))
-        if key == "input":
-            defaults["input"] = _relative_to(base, item, key, value) if not str(item).startswith("builtin:") else item
-            continue
-        if name not in parameters or isinstance(parameters[name], click.Argument):
-            raise click.BadParameter(f"unknown key {key!r} in {value}", ctx, param)
-        if isinstance(item, bool) != getattr(parameters[name], "is_flag", False):
-            raise click.BadParameter(f"key {key!r} in {value}: wrong type {type(item).__name__}", ctx, param)
-        try:
-            converted = parameters[name].type_cast_value(ctx, item)
-        except click.BadParameter as error:
-            raise click.BadParameter(f"key {key!r} in {value}: {error.message}", ctx, param) from None
-        if name in PATH_KEYS:
-            converted = _resolve_paths(base, converted)
-        defaults[name] = converted
-    ctx.default_map = {**(ctx.default_map or {}), **defaults}
-    return value
-
-
-def _relative_to(base, path, key, config):
-    if not isinstance(path, str):
-        raise click.BadParameter(f"key {key!r} in {config}: expected a path")
-    return path if path == "-" or os.path.isabs(path) else os.path.join(base, path)
-
-
-def _resolve_paths(base, value):
-    if isinstance(value, tuple):
-        return tuple(_resolve_paths(base, item) for item in value)
-    if value is None or value in ("-", "density", "uniform") or os.path.isabs(value):
-        return value
-    return os.path.join(base, value)
 
 
 def resolve_input(ctx, given):
