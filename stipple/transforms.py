@@ -141,9 +141,13 @@ class TorusFourier:
         values = self.nufft.type2(packed)
         return [np.stack([v.real, v.imag], axis=1) for v in values]
 
+    def _analyse_packed(self, vectors):
+        """Type-1 transforms of ``v_x + i v_y`` for each real ``(M, 2)`` field."""
+        return self.nufft.type1(np.stack([v[:, 0] + 1j * v[:, 1] for v in vectors]))
+
     def gradient_analysis(self, vectors):
         """``sum_i (-2 pi i n . v_i) e^{-2 pi i n.u_i}`` for a list of real ``(M, 2)`` fields."""
-        packed = self.nufft.type1(np.stack([v[:, 0] + 1j * v[:, 1] for v in vectors]))
+        packed = self._analyse_packed(vectors)
         # T(v_x) = (T(z)_n + conj T(z)_-n) / 2 and T(v_y) = (T(z)_n - conj T(z)_-n) / 2i, z = v_x + i v_y.
         mirrored = packed[:, ::-1, ::-1].conj()
         mirrored *= self._analysis_factors[1]
@@ -166,7 +170,7 @@ class TorusFourier:
                 2 * weights * np.pi**2 * (n1 - 1j * n2) ** 2,
             )
         _, same, mirrored = self._gram_weights
-        packed = self.nufft.type1(np.stack([v[:, 0] + 1j * v[:, 1] for v in vectors]))
+        packed = self._analyse_packed(vectors)
         count = len(vectors)
         gram = np.empty((count, count))
         for a in range(count):
