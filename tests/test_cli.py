@@ -96,3 +96,10 @@ def test_missing_and_blank_inputs(tmp_path):
     Image.new("L", (8, 8), 255).save(blank)
     result = run(["torus", blank, "-q"])
     assert result.exit_code == 1 and "blank" in result.output
+
+
+def test_image_from_stdin(image_path):
+    args = ["torus", "-", "-M", 40, "-N", 12, "--iterations", 2, "-q"]
+    from_stdin = run(args, input=image_path.read_bytes())
+    from_file = run(["torus", image_path] + args[2:])
+    assert from_stdin.exit_code == 0 and from_stdin.stdout == from_file.stdout

@@ -108,3 +108,20 @@ def test_image_map_uses_dark_as_dense(tmp_path):
     result = run(["sphere", tmp_path / "dark-north.png", "-M", 100, "-N", 6, "--iterations", 0, "-q"])
     latitude = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")[:, 1]
     assert np.all(latitude >= 0)
+
+
+def test_init_from_lonlat_and_xyz_csv(tmp_path):
+    start = tmp_path / "start.csv"
+    run(["sphere", "--uniform", "-M", 40, "-N", 4, "--iterations", 0, "-q", "-o", start])
+    same = run(["sphere", "--uniform", "-M", 40, "-N", 4, "--iterations", 0, "-q", "--init", start])
+    assert same.stdout == start.read_text()
+    xyz = tmp_path / "start-xyz.csv"
+    run(["sphere", "--uniform", "-M", 40, "-N", 4, "--iterations", 0, "-q", "--coords", "xyz", "-o", xyz])
+    again = run(["sphere", "--uniform", "-M", 40, "-N", 4, "--iterations", 0, "-q", "--init", xyz])
+    assert again.stdout == start.read_text()
+
+
+def test_map_from_stdin(map_path):
+    result = run(["sphere", "-", "-M", 50, "-N", 6, "--iterations", 1, "-q"], input=map_path.read_bytes())
+    assert result.exit_code == 0, result.output
+    assert len(result.stdout.splitlines()) == 51
