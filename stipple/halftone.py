@@ -64,6 +64,28 @@ def check_bandwidth(bandwidth):
     return check_integer("bandwidth", bandwidth, 2, MAX_BANDWIDTH, even=True)
 
 
+def available_memory():
+    """Bytes of memory available to a new allocation (MemAvailable on Linux, else physical memory)."""
+    try:
+        with open("/proc/meminfo") as stream:
+            for line in stream:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def check_memory(needed, what):
+    """Refuse a problem whose estimated working memory exceeds what the machine has available."""
+    available = available_memory()
+    if needed > available:
+        raise StippleError(
+            f"{what} needs about {needed / 2**30:.1f} GiB of memory, more than the {available / 2**30:.1f} GiB "
+            "available; use fewer points or a smaller bandwidth"
+        )
+
+
 def check_epsilon(epsilon):
     if not isinstance(epsilon, (int, float, np.floating)) or not 1e-14 <= epsilon <= 1e-2:
         raise StippleError(f"epsilon must be a number in [1e-14, 1e-2], not {epsilon!r}")

@@ -1,5 +1,7 @@
 """Halftoning on the sphere: exact coefficients of cell maps and analytic densities, the distance kernel."""
 
+import os
+
 import numpy as np
 from scipy.special import roots_legendre
 
@@ -10,11 +12,12 @@ from .halftone import (
     check_count,
     check_epsilon,
     check_integer,
+    check_memory,
     check_threads,
     default_threads,
     run,
 )
-from .inputs import check_grid
+from .inputs import check_grid, load_density
 from .kernels import sphere_kernel
 from .manifolds import Sphere
 from .objective import Discrepancy
@@ -25,8 +28,8 @@ DEFAULT_EPSILON = 1e-10
 
 
 def default_bandwidth(n_points):
-    """The paper's ratio for Fig. 5.3 (M = 200000, N = 1000): ``N ≈ 2.24 sqrt(M)``."""
-    return int(np.ceil(2.236 * np.sqrt(n_points)))
+    """The paper's ratio for Fig. 5.3 (M = 200000, N = 1000): ``N ≈ 2.24 sqrt(M)`` (at most ``MAX_BANDWIDTH``)."""
+    return min(int(np.ceil(2.236 * np.sqrt(n_points))), MAX_BANDWIDTH)
 
 
 def check_degree(bandwidth):
@@ -187,6 +190,8 @@ def as_density(weights, lon0=0.0):
         return weights
     if callable(weights):
         return AnalyticDensity(weights)
+    if isinstance(weights, (str, os.PathLike)):
+        weights = load_density(weights)
     return CellMap(weights, lon0)
 
 
@@ -197,6 +202,8 @@ def sphere_problem(
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
     bandwidth = check_degree(default_bandwidth(n_points) if bandwidth is None else bandwidth)
+    # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
+    check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
     epsilon = check_epsilon(epsilon)
     target = density.coefficients(bandwidth, threads)
@@ -229,10 +236,10 @@ def halftone_sphere(
 
     Parameters
     ----------
-    weights : array_like (H, W), callable, density object, or None
+    weights : array_like (H, W), path, callable, density object, or None
         An equirectangular map of ``w >= 0`` (row 0 at the north pole, column 0 starting at ``lon0``
-        degrees east), a function of unit vectors ``(M, 3) -> (M,)``, or None for ``w ≡ 1``
-        (numerical spherical designs).
+        degrees east) or a file read by ``stipple.load_density``, a function of unit vectors
+        ``(M, 3) -> (M,)``, or None for ``w ≡ 1`` (numerical spherical designs).
     n_points : int
         Number of dots M.
     bandwidth : int, optional

@@ -1,10 +1,21 @@
 """Halftoning on the torus: an image's exact Fourier coefficients, the ball-discrepancy kernel, sampling."""
 
+import os
+
 import numpy as np
 
 from .errors import StippleError
-from .halftone import Problem, check_bandwidth, check_count, check_epsilon, check_threads, run
-from .inputs import check_grid
+from .halftone import (
+    MAX_BANDWIDTH,
+    Problem,
+    check_bandwidth,
+    check_count,
+    check_epsilon,
+    check_memory,
+    check_threads,
+    run,
+)
+from .inputs import check_grid, load_density
 from .kernels import ball_kernel
 from .manifolds import Torus
 from .objective import Discrepancy
@@ -14,8 +25,9 @@ DEFAULT_EPSILON = 1e-9
 
 
 def default_bandwidth(n_points):
-    """The paper's ratio for Fig. 5.1 (M = 30150, N = 650): ``N ≈ 3.74 sqrt(M)``, rounded up to even."""
-    return int(2 * np.ceil(1.87 * np.sqrt(n_points)))
+    """The paper's ratio for Fig. 5.1 (M = 30150, N = 650): ``N ≈ 3.74 sqrt(M)``, rounded up to even
+    (at most ``MAX_BANDWIDTH``)."""
+    return min(int(2 * np.ceil(1.87 * np.sqrt(n_points))), MAX_BANDWIDTH)
 
 
 def torus_scale(shape):
@@ -82,10 +94,14 @@ def check_weights(weights):
 def torus_problem(
     weights, n_points, bandwidth=None, *, backend="ducc0", threads=None, epsilon=DEFAULT_EPSILON, hessian="gauss-newton"
 ):
-    """The halftoning problem of ``weights`` (rows top to bottom) with ``n_points`` dots on T²."""
+    """The halftoning problem of ``weights`` (rows top to bottom, or an image file) with ``n_points`` dots on T²."""
+    if isinstance(weights, (str, os.PathLike)):
+        weights = load_density(weights)
     weights = check_weights(weights)
     n_points = check_count(n_points)
     bandwidth = check_bandwidth(default_bandwidth(n_points) if bandwidth is None else bandwidth)
+    # About a dozen complex mode grids (oversampled) and forty real values per point live at once.
+    check_memory(12 * 16 * 1.6 * (bandwidth + 1) ** 2 + 40 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
     threads = 1 if threads is None else check_threads(threads)
@@ -130,9 +146,9 @@ def halftone_torus(
 
     Parameters
     ----------
-    weights : array_like, shape (H, W)
-        Density ``w >= 0`` per pixel, row 0 at the top (dark image regions have large ``w``;
-        ``stipple.load_density`` turns an image file into one).
+    weights : array_like of shape (H, W), or a path
+        Density ``w >= 0`` per pixel, row 0 at the top, or an image / ``.npy`` file read by
+        ``stipple.load_density`` (dark image regions get large ``w``).
     n_points : int
         Number of dots M, 1 <= M <= 20,000,000.
     bandwidth : int, optional

@@ -123,6 +123,7 @@ def test_decompression_bomb(files, monkeypatch):
         (["-M", "0"], "number of points must be an integer in [1,"),
         (["-M", "-5"], "number of points must be an integer in [1,"),
         (["-M", "999999999"], "number of points must be an integer in [1,"),
+        (["-M", "20000000", "-N", "8192"], "GiB of memory, more than"),
         (["-N", "9"], "bandwidth must be an even integer"),
         (["-N", "-2"], "bandwidth must be an even integer"),
         (["-N", "100000"], "bandwidth must be an even integer"),
