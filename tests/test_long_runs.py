@@ -26,12 +26,15 @@ def start(args):
 
 
 def wait_for_checkpoints(path, count, process, timeout=60):
-    """Wait until the checkpoint file has been replaced ``count`` times (each save is a new inode)."""
+    """Wait until ``count`` distinct versions of the checkpoint file have been seen (inode and mtime)."""
     seen = set()
     deadline = time.monotonic() + timeout
     while len(seen) < count and time.monotonic() < deadline and process.poll() is None:
-        if path.exists():
-            seen.add(os.stat(path).st_ino)
+        try:
+            status = os.stat(path)
+            seen.add((status.st_ino, status.st_mtime_ns))
+        except FileNotFoundError:
+            pass
         time.sleep(0.005)
     assert process.poll() is None, "the run ended before it could be interrupted; make it longer"
     assert len(seen) >= count
