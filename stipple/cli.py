@@ -599,6 +599,8 @@ def evaluate(
         if spectrum_path is not None:
             check_writable(spectrum_path)
         domain, points = read_points(points_source)
+        if spectrum_path is not None and domain != "torus":
+            raise StippleError("--spectrum is for torus points only")
         if domain == "torus":
             from .torus import torus_problem
 
@@ -614,8 +616,6 @@ def evaluate(
             density = load_sphere_density(input_source, options)
             problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
             report = evaluate_sphere(problem, points, density)
-        if spectrum_path is not None and "spectrum" not in report:
-            raise StippleError("--spectrum is for torus points (the sphere has no flat Fourier spectrum here)")
         if spectrum_path is not None:
             spectrum = report["spectrum"]
             emit_file(spectrum_path, spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"]))
