@@ -17,7 +17,7 @@ class Discrepancy:
     weight : float
         Quadrature weight ``lam = w_0 / M`` of every point.
     hessian : {"gauss-newton", "full"}
-        Which Hessian ``hessian_vector`` applies; "full" needs ``fourier.hessian_synthesis``.
+        Which Hessian ``hessian_gram`` and ``hessian_vectors`` use; "full" needs ``fourier.hessian_synthesis``.
 
     Notes
     -----
