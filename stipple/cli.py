@@ -118,6 +118,7 @@ def common_options(function):
             help="Stop when the gradient norm falls to this fraction of the initial one.",
         ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
+        click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
         click.option(
             "--threads",
@@ -235,6 +236,7 @@ def solve(problem, options, init):
                 tol=options["tol"],
                 iterations=options["iterations"],
                 time_limit=options["time_limit"],
+                safeguard=options["safeguard"],
                 callback=lambda state: progress(state) or interruption(state),
                 checkpoint=options["checkpoint"],
                 checkpoint_seconds=seconds,

@@ -126,6 +126,7 @@ def run(
     iterations=2000,
     time_limit=None,
     restart_every=None,
+    safeguard=False,
     callback=None,
     checkpoint=None,
     checkpoint_seconds=None,
@@ -141,7 +142,7 @@ def run(
         Starting points: i.i.d. from the density (default), uniform, or given (internal coordinates).
     seed : int
         Seed of the random start.
-    tol, iterations, time_limit, restart_every, callback :
+    tol, iterations, time_limit, restart_every, safeguard, callback :
         See ``stipple.optimize.minimize``; ``iterations`` counts from the very start of a resumed run.
     checkpoint : path, optional
         Save the complete state there (atomically) every ``checkpoint_seconds`` or
@@ -176,6 +177,7 @@ def run(
         max_iterations=iterations,
         time_limit=time_limit,
         restart_every=restart_every,
+        safeguard=safeguard,
         callback=_chain(saver, callback),
     )
     if saver is not None:

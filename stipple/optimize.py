@@ -81,11 +81,12 @@ def initial_state(objective, manifold, points):
     )
 
 
-def cg_step(objective, manifold, state, restart_every):
+def cg_step(objective, manifold, state, restart_every, safeguard=False):
     """One CG iteration; returns the next state, or ``None`` if no descent step exists.
 
     Newton step ``alpha = -<d, h> / <d, H d>``, Daniel's ``beta = <h', H' d~> / <d~, H' d~>`` with the
-    transported direction ``d~``; restart with ``-h'`` when ``d'`` is not a descent direction.
+    transported direction ``d~``; restart with ``-h'`` when ``d'`` is not a descent direction. With
+    ``safeguard`` a step that raises the energy is halved (up to 30 times) before it is taken.
     """
     points, gradient = state.points, state.gradient
     direction, curvature = state.direction, state.direction_curvature
@@ -94,8 +95,14 @@ def cg_step(objective, manifold, state, restart_every):
         if not curvature > 0:
             return None
     step = -manifold.inner(points, direction, gradient) / curvature * direction
-    new_points = manifold.retract(points, step)
-    objective.set_points(new_points)
+    for _ in range(31 if safeguard else 1):
+        new_points = manifold.retract(points, step)
+        objective.set_points(new_points)
+        if not safeguard or objective.energy() <= state.energy * (1 + 1e-12):
+            break
+        step = step / 2
+    else:
+        return None
     new_gradient = manifold.riesz(new_points, objective.gradient())
     moved = manifold.transport(points, step, direction)
     gram = objective.hessian_gram([new_gradient, moved])
@@ -129,6 +136,7 @@ def minimize(
     max_iterations=1000,
     time_limit=None,
     restart_every=None,
+    safeguard=False,
     callback=None,
 ):
     """Minimise ``objective`` over point sets on ``manifold`` by nonlinear CG.
@@ -150,6 +158,8 @@ def minimize(
     restart_every : int, optional
         Restart with steepest descent every this many iterations (default: never, besides the
         automatic restarts when the direction is not a descent direction).
+    safeguard : bool
+        Halve steps that would raise the energy (default off: the paper's method takes every Newton step).
     callback : callable, optional
         ``callback(state)`` after the start and every iteration; returning True stops the run.
 
@@ -167,7 +177,7 @@ def minimize(
         status = _stop_reason(state, tol, max_iterations, time_limit, time.perf_counter() - started)
         if status is not None:
             break
-        following = cg_step(objective, manifold, state, restart_every)
+        following = cg_step(objective, manifold, state, restart_every, safeguard)
         if following is None:
             status = "no_descent"
             break

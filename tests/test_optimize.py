@@ -1,0 +1,92 @@
+"""The CG driver on a small objective with known behaviour (independent of the transforms)."""
+
+import numpy as np
+
+from stipple.manifolds import Sphere, Torus
+from stipple.optimize import minimize
+
+
+class Bowl:
+    """``E = sum (p - c)^4`` on the torus (no wrap-around near c), with a curvature form scaled by ``trust``.
+
+    ``trust < 1`` underestimates the curvature, so Newton steps overshoot and the energy can rise.
+    """
+
+    def __init__(self, centre, trust=1.0):
+        self.centre, self.trust = centre, trust
+
+    def set_points(self, points):
+        self.offset = points - self.centre
+
+    def energy(self):
+        return float(np.sum(self.offset**4))
+
+    def gradient(self):
+        return 4 * self.offset**3
+
+    def hessian_gram(self, vectors):
+        curvature = self.trust * 12 * self.offset**2
+        return np.array([[np.sum(u * curvature * v) for v in vectors] for u in vectors])
+
+
+def test_cg_converges_on_a_bowl():
+    centre = np.full((5, 2), 0.5)
+    start = centre + np.linspace(-0.2, 0.2, 10).reshape(5, 2)
+    result = minimize(Bowl(centre), Torus(), start, tol=1e-6, max_iterations=500)
+    assert result.status == "converged"
+    np.testing.assert_allclose(result.points, centre, atol=1e-2)
+    assert np.all(np.diff(result.energies) <= 0)
+
+
+def test_safeguard_stops_energy_rises():
+    centre = np.full((5, 2), 0.5)
+    start = centre + np.linspace(-0.2, 0.2, 10).reshape(5, 2)
+    plain = minimize(Bowl(centre, trust=0.3), Torus(), start, tol=1e-12, max_iterations=60)
+    guarded = minimize(Bowl(centre, trust=0.3), Torus(), start, tol=1e-12, max_iterations=60, safeguard=True)
+    assert np.any(np.diff(plain.energies) > 0)
+    assert np.all(np.diff(guarded.energies) <= 1e-12 * guarded.energies[:-1])
+    assert guarded.energies[-1] < 1e-3 * guarded.energies[0]
+
+
+def test_time_limit_and_callback_stop():
+    centre = np.full((5, 2), 0.5)
+    start = centre + 0.1
+    assert minimize(Bowl(centre), Torus(), start, tol=1e-15, max_iterations=10**6, time_limit=1e-9).status == (
+        "time_limit"
+    )
+    calls = []
+    result = minimize(Bowl(centre), Torus(), start, tol=1e-15, callback=lambda s: calls.append(s) or len(calls) > 3)
+    assert result.status == "stopped" and result.iterations == 3
+
+
+def test_riemannian_cg_on_the_sphere_minimises_height():
+    """``E = sum z_i`` on (S²)^M: every point runs to the south pole."""
+
+    class Height:
+        def set_points(self, points):
+            self.points = points
+
+        def energy(self):
+            return float(np.sum(self.points[:, 2]))
+
+        def gradient(self):
+            return np.tile([0.0, 0.0, 1.0], (len(self.points), 1))
+
+        def hessian_gram(self, vectors):
+            # Riemannian Hessian of the height function: -z <u, v> per point.
+            weights = -self.points[:, 2:3]
+            return np.array([[np.sum(weights * u * v) + 1e-3 * np.sum(u * v) for v in vectors] for u in vectors])
+
+    rng = np.random.default_rng(3)
+    start = Sphere().random(rng, 20)
+    start[:, 2] = -np.abs(start[:, 2]) - 0.1
+    start /= np.linalg.norm(start, axis=1, keepdims=True)
+    result = minimize(Height(), Sphere(), start, tol=1e-8, max_iterations=200, safeguard=True)
+    np.testing.assert_allclose(result.points[:, 2], -1, atol=1e-6)
+    np.testing.assert_allclose(np.linalg.norm(result.points, axis=1), 1, atol=1e-14)
+
+
+def test_zero_gradient_start_is_converged():
+    centre = np.full((3, 2), 0.5)
+    result = minimize(Bowl(centre), Torus(), centre.copy(), tol=1e-3)
+    assert result.status == "converged" and result.iterations == 0
