@@ -262,3 +262,29 @@ def test_save_is_atomic_when_the_target_directory_vanishes(files, monkeypatch):
         save_checkpoint(path, state, problem)
     assert path.read_bytes() == before
     assert not [p for p in files[0].iterdir() if p.name.startswith(".stipple-")]
+
+
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (["-M", 31], "points was 30, now 31"),
+        (["-N", 10], "bandwidth was 8, now 10"),
+        (["--hessian", "full"], "hessian was 'gauss-newton', now 'full'"),
+    ],
+)
+def test_resume_refuses_a_different_problem(files, change, message):
+    path = saved_checkpoint(files[0], weights_of(files[1]))
+    args = ["torus", files[1], "-M", 30, "-N", 8, "--iterations", 4, "-q", "-o", files[2]]
+    text = invoke(args + ["--checkpoint", path, "--resume", *change])
+    assert message in text and files[2].read_text() == KEEP
+
+
+def test_resume_refuses_another_kernel_or_domain(files):
+    path = files[0] / "sphere.npz"
+    base = ["sphere", "--uniform", "-M", 30, "-N", 4, "--iterations", 2, "-q", "-o", files[2]]
+    assert CliRunner().invoke(main, [str(a) for a in base + ["--checkpoint", path]]).exit_code == 0
+    assert "kernel was 'distance', now 'sobolev:1'" in invoke(
+        base + ["--checkpoint", path, "--resume", "--kernel", "sobolev:1"]
+    )
+    text = invoke(["torus", files[1], "-M", 30, "-N", 4, "-q", "-o", files[2], "--checkpoint", path, "--resume"])
+    assert "domain was 'sphere', now 'torus'" in text
