@@ -90,7 +90,8 @@ def rescale(values, value_range=None, name="input"):
     low, high = value_range if value_range is not None else (values.min(), values.max())
     if not high > low:
         raise StippleError(f"{name}: map is constant ({low:g}); nothing to rescale (give a range)")
-    return np.clip((values - low) / (high - low), 0.0, 1.0)
+    # Halving first keeps high - low finite for values near the float64 limits.
+    return np.clip((values / 2 - low / 2) / (high / 2 - low / 2), 0.0, 1.0)
 
 
 def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None):

@@ -12,7 +12,7 @@ from stipple.errors import StippleError
 from stipple.inputs import NPY_MAGIC, load_density, read_points_csv
 from stipple.outputs import UNITS, parse_length
 
-FAST = settings(max_examples=150, deadline=None)
+FAST = settings(max_examples=150, deadline=None, derandomize=True)
 SHAPES = st.tuples(st.integers(0, 5), st.integers(0, 5)) | st.tuples(st.integers(1, 3))
 
 
@@ -50,6 +50,7 @@ def test_arbitrary_npy_payloads_fail_cleanly(tail):
     )
 )
 def test_numeric_arrays_load_or_fail_cleanly(array):
+    """Includes values near the float64 limits, where a naive max - min overflows."""
     buffer = io.BytesIO()
     np.save(buffer, array)
     try:
@@ -106,3 +107,10 @@ def test_points_csv(text):
     except StippleError:
         return
     assert points.shape[1] == 2 and len(points) > 0 and np.all(np.isfinite(points))
+
+
+def test_extreme_values_rescale_without_overflow():
+    buffer = io.BytesIO()
+    np.save(buffer, np.array([[-1.7e308, 0.0], [1.7e308, 1.0]]))
+    density = load_density(bytes_source(buffer.getvalue()))
+    np.testing.assert_allclose(density, [[0, 0.5], [1, 0.5]])
