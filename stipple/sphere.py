@@ -1,5 +1,6 @@
 """Halftoning on the sphere: exact coefficients of cell maps and analytic densities, the distance kernel."""
 
+import functools
 import os
 
 import numpy as np
@@ -129,13 +130,17 @@ class AnalyticDensity:
         weighted = values * _gauss_weights(len(theta))[:, None] * 2 * np.pi / len(phi)
         return ducc0.sht.adjoint_synthesis_2d(map=weighted[None], lmax=lmax, spin=0, geometry="GL", nthreads=threads)[0]
 
-    def cell_map(self):
-        """The density on a 0.5° cell grid (for sampling starts and cap masses)."""
+    @functools.cached_property
+    def _cells(self):
         rows = 360
         latitudes = (np.arange(rows) + 0.5) * np.pi / rows
         longitudes = (np.arange(2 * rows) + 0.5) * np.pi / rows
         z, phi = np.cos(latitudes)[:, None] + 0 * longitudes, longitudes[None, :] + 0 * latitudes[:, None]
         return CellMap(self.function(unit_vectors(z.ravel(), phi.ravel())).reshape(rows, 2 * rows))
+
+    def cell_map(self):
+        """The density on a 0.5° cell grid (for sampling starts and cap masses), evaluated once."""
+        return self._cells
 
     def sample(self, rng, count):
         """Approximately i.i.d. from the density (its values on a 0.5° grid), good for a start."""
