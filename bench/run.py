@@ -40,13 +40,13 @@ def median_iteration_seconds(problem, iterations):
 
 
 def transform_counts(problem):
-    fourier = problem.objective.fourier
+    fourier = problem.discrepancy.fourier
     return getattr(fourier, "nufft", fourier).counts
 
 
 def raw_torus_seconds(problem, points, repeats):
     """One iteration's NUFFTs called directly: set points, type 1 of 1 + 2 arrays, type 2 of 1 array."""
-    nufft = problem.objective.fourier.nufft
+    nufft = problem.discrepancy.fourier.nufft
     single = np.ones((1, len(points)), dtype=np.complex128)
     pair = np.ones((2, len(points)), dtype=np.complex128)
     grid = np.ones((1,) + nufft.shape, dtype=np.complex128)
@@ -64,7 +64,7 @@ def raw_sphere_seconds(problem, points, repeats):
     """One iteration's SHTs called directly: adjoint spin 0, synthesis spin 1, two adjoints spin 1."""
     import ducc0
 
-    fourier = problem.objective.fourier
+    fourier = problem.discrepancy.fourier
     theta, phi = spherical_angles(points)
     options = dict(
         lmax=fourier.lmax, loc=np.stack([theta, phi], axis=1), epsilon=fourier.epsilon, nthreads=fourier.threads
@@ -102,9 +102,9 @@ def case(problem, raw_seconds, name, backend, threads, iterations):
         "N": problem.bandwidth,
         "backend": backend,
         "threads": threads,
-        "epsilon": problem.objective.fourier.epsilon
+        "epsilon": problem.discrepancy.fourier.epsilon
         if backend == "ducc0.sht"
-        else problem.objective.fourier.nufft.epsilon,
+        else problem.discrepancy.fourier.nufft.epsilon,
         "iterations_timed": iterations,
         "seconds_per_iteration": seconds,
         "raw_transform_seconds_per_iteration": raw,

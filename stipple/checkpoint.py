@@ -27,7 +27,7 @@ SCALARS = ("iteration", "gradient_curvature", "direction_curvature", "initial_gr
 
 def fingerprint(problem):
     """SHA-256 of the input as the objective sees it (its exact Fourier coefficients)."""
-    return hashlib.sha256(np.ascontiguousarray(problem.objective.target).tobytes()).hexdigest()
+    return hashlib.sha256(np.ascontiguousarray(problem.discrepancy.target).tobytes()).hexdigest()
 
 
 def library_versions():

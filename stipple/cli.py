@@ -127,6 +127,12 @@ def common_options(function):
             help="Transform threads (default: torus 1, bit-reproducible; sphere all CPUs).",
         ),
         click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+        click.option(
+            "--near-field/--no-near-field",
+            default=None,
+            help="Sum the kernel's short range over neighbouring pairs: the untruncated discrepancy, no clumps "
+            "(default; sphere: with the distance kernel). --no-near-field: the paper's bandlimited E_N.",
+        ),
         click.option("--invert", is_flag=True, help="Images: w = u (white dots on black); maps: w = 1 - map."),
         click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
         click.option(
@@ -218,7 +224,7 @@ def solve(problem, options, init):
     seconds, iterations = parse_every(options["checkpoint_every"])
     verbose = options["verbose"] and not options["quiet"]
     if verbose:
-        fourier = problem.objective.fourier
+        fourier = problem.discrepancy.fourier
         transforms = getattr(fourier, "nufft", fourier)
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
         click.echo(
@@ -317,6 +323,7 @@ def torus(ctx, image, **options):
             threads=options["threads"],
             epsilon=options["epsilon"] or DEFAULT_EPSILON,
             hessian=options["hessian"],
+            near_field=options["near_field"] is not False,
         )
         result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
         points = plot_order(
@@ -394,6 +401,7 @@ def sphere(ctx, map_source, **options):
             kernel=options["kernel"],
             threads=options["threads"],
             epsilon=options["epsilon"] or DEFAULT_EPSILON,
+            near_field=options["near_field"],
         )
         result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
         points = plot_order(result.points, result.points, options, "radians")

@@ -25,18 +25,24 @@ BASIS_SQUARE = {"torus": 1.0, "sphere": 1 / (4 * np.pi)}
 
 
 def discrepancy_energy(problem, points):
-    """``E_N`` of ``points`` for the problem's kernel and density."""
+    """The paper's bandlimited ``E_N`` of ``points`` for the problem's kernel and density."""
+    problem.discrepancy.set_points(points)
+    return problem.discrepancy.bandlimited_energy()
+
+
+def untruncated_energy(problem, points):
+    """The objective with its near field: the untruncated discrepancy (equal to ``E_N`` without a near field)."""
     problem.objective.set_points(points)
     return problem.objective.energy()
 
 
 def expected_iid_energy(problem):
     """Exact expectation of ``E_N`` for ``M`` i.i.d. points drawn from the density."""
-    objective = problem.objective
-    mass = objective.weight * problem.n_points
-    normalised = objective.target / mass
+    discrepancy = problem.discrepancy
+    mass = discrepancy.weight * problem.n_points
+    normalised = discrepancy.target / mass
     variance = BASIS_SQUARE[problem.domain] - np.abs(normalised) ** 2
-    return float(objective.weight**2 * problem.n_points * np.sum(objective.energy_weights * variance))
+    return float(discrepancy.weight**2 * problem.n_points * np.sum(discrepancy.bandlimited_weights * variance))
 
 
 def periodic_blur(image, sigma):
@@ -107,7 +113,7 @@ def summary(values):
 
 def power_spectrum(problem, points, max_frequency=None):
     """Radially averaged periodogram and anisotropy (dB) over integer annuli of the mode grid."""
-    fourier = problem.objective.fourier
+    fourier = problem.discrepancy.fourier
     fourier.set_points(points)
     coeffs = fourier.analysis()
     n1, n2 = fourier.modes
@@ -169,6 +175,7 @@ def evaluate_torus(problem, points, weights):
         "energy": energy,
         "expected_iid_energy": expected,
         "energy_ratio_to_iid": energy / expected,
+        "untruncated_energy": untruncated_energy(problem, points),
         "similarity": image_similarity(weights, points),
         "neighbour_distance_over_hexagonal": summary(torus_neighbour_ratios(points, weights)),
     }
@@ -179,11 +186,11 @@ def evaluate_torus(problem, points, weights):
 
 def evaluate_sphere(problem, points, density):
     """All sphere measures as a dict (see the module docstring)."""
-    from .sphere import CellMap
 
     expected = expected_iid_energy(problem)
-    cells = density if isinstance(density, CellMap) else density.cell_map()
+    cells = density.cell_map()
     energy = discrepancy_energy(problem, points)
+    coefficient_error = float(np.abs(problem.discrepancy._residual[1:]).max())
     return {
         "domain": "sphere",
         "points": len(points),
@@ -191,7 +198,8 @@ def evaluate_sphere(problem, points, density):
         "energy": energy,
         "expected_iid_energy": expected,
         "energy_ratio_to_iid": energy / expected,
-        "max_coefficient_error": float(np.abs(problem.objective._residual[1:]).max()),
+        "untruncated_energy": untruncated_energy(problem, points),
+        "max_coefficient_error": coefficient_error,
         "minimum_separation_degrees": float(np.degrees(minimum_separation(points))),
         "cap_discrepancy": cap_discrepancy(points, *cells.centres_and_masses()),
     }

@@ -18,13 +18,15 @@ INITS = ("density", "uniform")
 class Problem:
     """A halftoning problem ready to optimise.
 
-    ``sample(rng, count)`` draws i.i.d. points from the density; ``settings`` are the values that
-    define the problem (compared when a checkpoint is resumed).
+    ``objective`` is what CG minimises; ``discrepancy`` its transform part (the whole objective without a near
+    field), which evaluation uses for ``E_N``. ``sample(rng, count)`` draws i.i.d. points from the density;
+    ``settings`` are the values that define the problem (compared when a checkpoint is resumed).
     """
 
     domain: str
     manifold: object
     objective: object
+    discrepancy: object
     n_points: int
     bandwidth: int
     sample: object
@@ -62,6 +64,25 @@ def check_threads(threads):
 
 def check_bandwidth(bandwidth):
     return check_integer("bandwidth", bandwidth, 2, MAX_BANDWIDTH, even=True)
+
+
+def hexagonal_spacing(n_points, area):
+    """Distance between neighbours of ``n_points`` dots in hexagonal packing on ``area``."""
+    return np.sqrt(2 * area / (np.sqrt(3) * n_points))
+
+
+def peak_ratio(values, areas=None, mass_fraction=0.01):
+    """How much denser than average the densest ``mass_fraction`` of the density is.
+
+    The density level above which ``mass_fraction`` of the mass lies, over the mean density: 1 for a constant
+    density, about the peak-to-mean ratio for a bump, and blind to a few dark pixels that hold little mass.
+    """
+    values = np.ravel(values).astype(float)
+    areas = np.ones_like(values) if areas is None else np.ravel(areas)
+    order = np.argsort(values)[::-1]
+    mass = np.cumsum(values[order] * areas[order])
+    level = values[order][min(np.searchsorted(mass, mass_fraction * mass[-1]), len(values) - 1)]
+    return float(max(level / (mass[-1] / areas.sum()), 1.0))
 
 
 def available_memory():

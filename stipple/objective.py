@@ -6,6 +6,15 @@ import numpy as np
 class Discrepancy:
     """``E(p) = sum_l mult_l k_l |F_l(p)|^2`` with ``F_l = lam * sum_i conj(psi_l(p_i)) - w_l``.
 
+    With a near-field split (``cross_kernel`` given) ``kernel`` is the smooth part ``k^R`` and ``cross_kernel`` the
+    short-range part ``k^near`` of the full kernel ``k = k^R + k^near``. The near part's point-point sum is
+    ``NearField``'s; only its point-density cross term is left here:
+
+        E = sum_l mult_l ( k^R_l |F_l|^2 - k^near_l (|w_l|^2 + 2 Re conj(F_l) w_l) ),
+
+    which is ``sum_l mult_l k^near_l ( |F_l|^2 - lam^2 |c_l|^2 )`` and makes ``E + E_near`` the untruncated
+    discrepancy up to the tails of ``k^R`` and of the density's spectrum beyond the band.
+
     Parameters
     ----------
     fourier : TorusFourier or SphereFourier
@@ -18,6 +27,8 @@ class Discrepancy:
         Quadrature weight ``lam = w_0 / M`` of every point.
     hessian : {"gauss-newton", "full"}
         Which Hessian ``hessian_gram`` and ``hessian_vectors`` use; "full" needs ``fourier.hessian_synthesis``.
+    cross_kernel : numpy.ndarray, optional
+        Coefficients ``k^near_l`` of the near-field part, same layout (default: no split).
 
     Notes
     -----
@@ -25,7 +36,7 @@ class Discrepancy:
     turns them into tangent vectors.
     """
 
-    def __init__(self, fourier, kernel, target, weight, hessian="gauss-newton"):
+    def __init__(self, fourier, kernel, target, weight, hessian="gauss-newton", cross_kernel=None):
         if hessian not in ("gauss-newton", "full"):
             raise ValueError(f"hessian must be 'gauss-newton' or 'full', not {hessian!r}")
         if hessian == "full" and not hasattr(fourier, "hessian_synthesis"):
@@ -38,6 +49,10 @@ class Discrepancy:
         self.target = target
         self.weight = weight
         self.hessian = hessian
+        self.cross_kernel = np.zeros_like(kernel) if cross_kernel is None else cross_kernel
+        self.bandlimited_weights = (kernel + self.cross_kernel) * fourier.multiplicity
+        self._cross_pull = self.cross_kernel * target
+        self._cross_weights = self.cross_kernel * fourier.multiplicity
         self._residual = None
 
     def set_points(self, points):
@@ -50,11 +65,23 @@ class Discrepancy:
 
     def energy(self):
         residual = _real_view(self._residual)
-        return float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
+        quadratic = float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
+        if not self.cross_kernel.any():
+            return quadratic
+        cross = np.abs(self.target) ** 2 + 2 * (self._residual.conj() * self.target).real
+        return quadratic - float(np.sum(self._cross_weights * cross))
+
+    def bandlimited_energy(self):
+        """The paper's ``E_N = sum_l mult_l k_l |F_l|^2`` with the whole kernel ``k = k^R + k^near``."""
+        return float(np.sum(self.bandlimited_weights * np.abs(self._residual) ** 2))
+
+    def _synthesis_coeffs(self):
+        """``k^R F - k^near w``: the coefficients whose gradient synthesis is ``dE/dp / (2 lam)``."""
+        return self.kernel * self._residual - self._cross_pull
 
     def gradient(self):
-        """``dE/dp_i = 2 lam Re sum_l k_l F_l grad psi_l(p_i)``."""
-        return 2 * self.weight * self.fourier.gradient_synthesis([self.kernel * self._residual])[0]
+        """``dE/dp_i = 2 lam Re sum_l (k^R_l F_l - k^near_l w_l) grad psi_l(p_i)``."""
+        return 2 * self.weight * self.fourier.gradient_synthesis([self._synthesis_coeffs()])[0]
 
     def hessian_gram(self, vectors):
         """Matrix of the Hessian's bilinear form ``G[a, b] = v_a . H v_b`` on the given fields.
@@ -65,7 +92,7 @@ class Discrepancy:
         gram = 2 * self.weight**2 * self.fourier.jacobian_gram(vectors, self.energy_weights)
         count = len(vectors)
         if self.hessian == "full":
-            curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)
+            curvature = 2 * self.weight * self.fourier.hessian_synthesis(self._synthesis_coeffs())
             for a in range(count):
                 for b in range(a, count):
                     gram[a, b] += np.einsum("mi,mij,mj->", vectors[a], curvature, vectors[b])
@@ -79,7 +106,7 @@ class Discrepancy:
             jacobian *= self._jacobian_weights
         products = [2 * self.weight * hv for hv in self.fourier.gradient_synthesis(coeffs)]
         if self.hessian == "full":
-            curvature = 2 * self.weight * self.fourier.hessian_synthesis(self.kernel * self._residual)
+            curvature = 2 * self.weight * self.fourier.hessian_synthesis(self._synthesis_coeffs())
             products = [hv + np.einsum("mij,mj->mi", curvature, v) for hv, v in zip(products, vectors, strict=True)]
         return products
 
@@ -87,3 +114,27 @@ class Discrepancy:
 def _real_view(coeffs):
     """Interleaved real and imaginary parts of a contiguous complex array, without a copy."""
     return np.ascontiguousarray(coeffs).view(np.float64).reshape(-1)
+
+
+class SumObjective:
+    """The sum of objectives at the same points (the transform part and the near field): what CG drives."""
+
+    def __init__(self, *terms):
+        self.terms = terms
+
+    def set_points(self, points):
+        for term in self.terms:
+            term.set_points(points)
+
+    def energy(self):
+        return sum(term.energy() for term in self.terms)
+
+    def gradient(self):
+        return sum(term.gradient() for term in self.terms)
+
+    def hessian_gram(self, vectors):
+        return sum(term.hessian_gram(vectors) for term in self.terms)
+
+    def hessian_vectors(self, vectors):
+        per_term = [term.hessian_vectors(vectors) for term in self.terms]
+        return [sum(products) for products in zip(*per_term, strict=True)]

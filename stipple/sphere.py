@@ -16,21 +16,40 @@ from .halftone import (
     check_memory,
     check_threads,
     default_threads,
+    hexagonal_spacing,
+    peak_ratio,
     run,
 )
 from .inputs import check_grid, load_density
-from .kernels import sphere_kernel
+from .kernels import NearKernel, chord_profile, sphere_kernel
 from .manifolds import Sphere
-from .objective import Discrepancy
+from .nearfield import NearField, SpherePairs
+from .objective import Discrepancy, SumObjective
 from .torus import cell_factor
 from .transforms import SphereFourier, alm_degrees_orders, spherical_angles
 
 DEFAULT_EPSILON = 1e-10
+# The paper's Fig. 5.3 (M = 200000, N = 1000): N = 2.236 sqrt(M) = 8.52 / (hexagonal spacing of M dots).
+MODES_PER_SPACING = 8.52
+# Near-field chordal radius times the degree: eps = 3 pi / N, as on the torus (eps = 3 / (2 rho_max) with the
+# highest frequency rho_max = N / (2 pi) of degree N).
+NEAR_FIELD_REACH = 3 * np.pi
+NEAR_FIELD_SPACINGS = 3.0
 
 
-def default_bandwidth(n_points):
-    """The paper's ratio for Fig. 5.3 (M = 200000, N = 1000): ``N ≈ 2.24 sqrt(M)`` (at most ``MAX_BANDWIDTH``)."""
-    return min(int(np.ceil(2.236 * np.sqrt(n_points))), MAX_BANDWIDTH)
+def default_bandwidth(n_points, density=None):
+    """Degree N from the dots' mean spacing and, given a density, its peak (as ``stipple.torus.default_bandwidth``).
+
+    ``N = 8.52 / s`` (the paper's ``2.24 sqrt(M)``), raised where the density is peaked so that the near-field
+    radius ``3 pi / N`` is at most three local spacings of the densest region (at most ``MAX_BANDWIDTH``).
+    """
+    spacing = hexagonal_spacing(n_points, 4 * np.pi)
+    bandwidth = MODES_PER_SPACING / spacing
+    if density is not None and not isinstance(density, UniformDensity):
+        cells = density.cell_map()
+        densest = spacing / np.sqrt(peak_ratio(cells.values, cells.cell_areas))
+        bandwidth = max(bandwidth, NEAR_FIELD_REACH / (NEAR_FIELD_SPACINGS * densest))
+    return min(int(np.ceil(bandwidth)), MAX_BANDWIDTH)
 
 
 def check_degree(bandwidth):
@@ -80,6 +99,10 @@ class CellMap:
         ring_weights = half * weights[None, :] * np.sin(theta)
         leg = (ring_weights[:, :, None] * (row_spectra * phase)[:, None, :]).reshape(1, -1, lmax + 1)
         return ducc0.sht.leg2alm(leg=leg, lmax=lmax, theta=theta.ravel(), spin=0, nthreads=threads)[0]
+
+    def cell_map(self):
+        """The map itself (densities share this interface for sampling and cap masses)."""
+        return self
 
     def centres_and_masses(self):
         """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
@@ -201,12 +224,23 @@ def as_density(weights, lon0=0.0):
 
 
 def sphere_problem(
-    weights, n_points, bandwidth=None, *, lon0=0.0, kernel="distance", threads=None, epsilon=DEFAULT_EPSILON
+    weights,
+    n_points,
+    bandwidth=None,
+    *,
+    lon0=0.0,
+    kernel="distance",
+    threads=None,
+    epsilon=DEFAULT_EPSILON,
+    near_field=None,
 ):
     """The halftoning problem of ``weights`` (see ``halftone_sphere``) with ``n_points`` dots on S²."""
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
-    bandwidth = check_degree(default_bandwidth(n_points) if bandwidth is None else bandwidth)
+    bandwidth = check_degree(default_bandwidth(n_points, density) if bandwidth is None else bandwidth)
+    near_field = kernel == "distance" if near_field is None else bool(near_field)
+    if near_field and kernel != "distance":
+        raise StippleError(f"the near field needs the distance kernel, not {kernel!r}")
     # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
     check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
@@ -215,12 +249,19 @@ def sphere_problem(
     degrees, _ = alm_degrees_orders(bandwidth)
     kernel_coeffs = sphere_kernel(kernel, degrees)
     fourier = SphereFourier(bandwidth, epsilon, threads)
-    mass = target[0].real * np.sqrt(4 * np.pi)
-    objective = Discrepancy(fourier, kernel_coeffs, target, weight=mass / n_points)
+    weight = target[0].real * np.sqrt(4 * np.pi) / n_points
+    if near_field:
+        near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
+        cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
+        discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
+        objective = SumObjective(discrepancy, NearField(near, weight, SpherePairs()))
+    else:
+        objective = discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
     return Problem(
         domain="sphere",
         manifold=Sphere(),
         objective=objective,
+        discrepancy=discrepancy,
         n_points=n_points,
         bandwidth=bandwidth,
         sample=density.sample,
@@ -229,13 +270,23 @@ def sphere_problem(
             "points": n_points,
             "bandwidth": bandwidth,
             "kernel": kernel,
+            "near_field": near_field,
             "hessian": "gauss-newton",
         },
     )
 
 
 def halftone_sphere(
-    weights, n_points, bandwidth=None, *, lon0=0.0, kernel="distance", threads=None, epsilon=DEFAULT_EPSILON, **options
+    weights,
+    n_points,
+    bandwidth=None,
+    *,
+    lon0=0.0,
+    kernel="distance",
+    threads=None,
+    epsilon=DEFAULT_EPSILON,
+    near_field=None,
+    **options,
 ):
     """Place ``n_points`` dots on the unit sphere so that they reproduce a density.
 
@@ -258,6 +309,9 @@ def halftone_sphere(
         deterministic for a fixed thread count).
     epsilon : float
         Requested accuracy of the transforms.
+    near_field : bool, optional
+        Minimise the untruncated distance discrepancy with its short range summed over neighbouring pairs
+        (default for the distance kernel); False gives the paper's bandlimited ``E_N``.
     **options
         As for ``halftone_torus``; ``init`` may be an (M, 3) array (normalised onto the sphere).
 
@@ -266,7 +320,9 @@ def halftone_sphere(
     HalftoneResult
         ``points`` as unit vectors of shape (M, 3); ``stipple.sphere.lon_lat`` converts them.
     """
-    problem = sphere_problem(weights, n_points, bandwidth, lon0=lon0, kernel=kernel, threads=threads, epsilon=epsilon)
+    problem = sphere_problem(
+        weights, n_points, bandwidth, lon0=lon0, kernel=kernel, threads=threads, epsilon=epsilon, near_field=near_field
+    )
     return run(problem, **options)
 
 

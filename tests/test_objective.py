@@ -12,7 +12,9 @@ STEPS = np.logspace(-2.5, -4, 6)
 
 def small_problem(rng, shape=(12, 20), hessian="gauss-newton", backend="ducc0"):
     weights = rng.random(shape)
-    problem = torus_problem(weights, 30, 14, threads=1, epsilon=1e-13, hessian=hessian, backend=backend)
+    problem = torus_problem(
+        weights, 30, 14, threads=1, epsilon=1e-13, hessian=hessian, backend=backend, near_field=False
+    )
     return problem, problem.sample(rng, 30)
 
 
