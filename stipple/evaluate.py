@@ -6,12 +6,15 @@ All formulas are documented in the README ("Evaluating point sets"); in short:
 * ``E_N`` of i.i.d. samples — exactly ``lam^2 M sum_l mult_l k_l (E|psi_l(X)|^2 - |w_l/m|^2)`` for ``X ~ w/m``:
   ``E|psi_l|^2 = 1`` on the torus and ``sum_m mult |Y_nm|^2 = (2n+1)/(4 pi)`` on the sphere (addition theorem).
 * Torus images: PSNR and SSIM between the density and the dots' density (one dot carries mass ``m/M``), both
-  blurred by a periodic Gaussian of ``sigma`` pixels; nearest-neighbour distances relative to a hexagonal
-  packing of the local density, ``d_hex = sqrt(2 / (sqrt(3) rho))``; the radially averaged power spectrum
+  blurred by a periodic Gaussian of ``sigma`` pixels; the radially averaged power spectrum
   ``P(f) = |sum_i exp(-2 pi i n.x_i)|^2 / M`` over annuli ``|n| in [f, f+1)`` and its anisotropy
   ``10 log10(var / mean^2)`` in dB.
 * Sphere: the minimum geodesic separation, and a spherical-cap discrepancy estimate
   ``max |#(points in cap)/M - w(cap)/m|`` over caps with 500 Fibonacci centres and 90 radii.
+* Both (clumps): each dot's nearest-neighbour distance (pixels on the torus, geodesic radians on the sphere)
+  over the spacing of a hexagonal packing of the local density, ``d_hex = sqrt(2 / (sqrt(3) rho))`` with
+  ``rho = M w(x) / int w`` per pixel or steradian; min, 1st and 5th percentile and median over the dots
+  outside the lightest cells that hold 1 % of the mass (:func:`light_threshold`).
 """
 
 import numpy as np
@@ -85,29 +88,144 @@ def image_similarity(weights, points, blurs=BLURS):
     return results
 
 
+LIGHT_MASS_FRACTION = 0.01
+
+
+def light_threshold(values, areas=1.0, fraction=LIGHT_MASS_FRACTION):
+    """The density level at or below which dots are not judged by the neighbour measure.
+
+    The largest cell value ``t >= 0`` such that the cells with ``w <= t`` carry at most ``fraction`` of the
+    mass: dots in zero-density cells are always left out, and the lightest cells together hold about
+    ``fraction`` of the dots. There the cell's value does not describe a dot's surroundings (a dot in a
+    nearly white pixel sits at the spacing of its darker neighbours) and its ratio would fill the lowest
+    percentiles.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Density on cells.
+    areas : float or numpy.ndarray
+        Cell areas (broadcast against ``values``).
+    fraction : float
+        Mass fraction of the lightest cells to leave out.
+
+    Returns
+    -------
+    float
+        Dots with ``w(x) > t`` are judged.
+    """
+    masses = np.ravel(values * np.broadcast_to(areas, np.shape(values)))
+    values = np.ravel(values)
+    order = np.argsort(values, kind="stable")
+    cumulative = np.cumsum(masses[order])
+    light = cumulative <= fraction * cumulative[-1]
+    # A level is usable only if every cell with that value is within the light mass (ties stay together).
+    usable = light & np.append(values[order][1:] != values[order][:-1], True)
+    return float(max(values[order][usable].max(), 0.0)) if usable.any() else 0.0
+
+
+def percentiles(ratios):
+    """``min``, 1st and 5th percentile and median of the finite ``ratios`` (empty dict if none)."""
+    ratios = ratios[np.isfinite(ratios)]
+    if ratios.size == 0:
+        return {}
+    low, p01, p05, median = np.percentile(ratios, [0, 1, 5, 50])
+    return {"min": float(low), "p01": float(p01), "p05": float(p05), "median": float(median)}
+
+
+def hexagonal_spacing(density):
+    """Spacing ``sqrt(2 / (sqrt(3) rho))`` of a hexagonal packing with ``rho`` points per unit area."""
+    with np.errstate(divide="ignore"):
+        return np.sqrt(2 / (np.sqrt(3) * density))
+
+
+def torus_neighbours(points, weights):
+    """Nearest-neighbour distance, local hexagonal spacing (both in pixels) and ``w`` at every point.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        ``(M, 2)`` points in the unit square (the torus scaled to ``[0, W/L) x [0, H/L)``, ``L = max(W, H)``).
+    weights : numpy.ndarray
+        The density on the ``(H, W)`` pixel grid.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(distance, spacing, w)``; the local density is ``M w / sum(w)`` dots per pixel.
+    """
+    rows, columns = weights.shape
+    size = np.array([columns, rows], dtype=float)
+    pixels = np.mod(points * size, size)
+    pixels[pixels >= size] = 0.0  # np.mod(-1e-17, 1) == 1.0
+    distances, _ = cKDTree(pixels, boxsize=size).query(pixels, k=2)
+    column = np.minimum((np.mod(points[:, 0], 1) * columns).astype(int), columns - 1)
+    row = np.minimum((np.mod(points[:, 1], 1) * rows).astype(int), rows - 1)
+    local = weights[row, column]
+    return distances[:, 1], hexagonal_spacing(len(points) * local / weights.sum()), local
+
+
 def torus_neighbour_ratios(points, weights):
     """Nearest-neighbour distance over the hexagonal spacing of the local density, for every point."""
-    rows, columns = weights.shape
-    scale = np.array([columns, rows]) / max(rows, columns)
-    physical = points * scale
-    tree = cKDTree(np.mod(physical, scale), boxsize=scale)
-    distances, _ = tree.query(np.mod(physical, scale), k=2)
-    column = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
-    row = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
-    area = scale[0] * scale[1]
-    density = len(points) * weights[row, column] / (weights.mean() * area)
-    with np.errstate(divide="ignore"):
-        hexagonal = np.sqrt(2 / (np.sqrt(3) * density))
-    return distances[:, 1] / hexagonal
+    distance, spacing, _ = torus_neighbours(points, weights)
+    return distance / spacing
 
 
-def summary(values):
-    values = values[np.isfinite(values)]
+def torus_clumps(points, weights):
+    """Percentiles of the neighbour ratio over the judged dots (:func:`light_threshold`), and distances."""
+    distance, spacing, local = torus_neighbours(points, weights)
+    judged = local > light_threshold(weights)
     return {
-        "min": float(values.min()),
-        "p05": float(np.percentile(values, 5)),
-        "median": float(np.median(values)),
-        "mean": float(values.mean()),
+        "neighbour_distance_over_hexagonal": percentiles(distance[judged] / spacing[judged]),
+        "neighbour_points_judged": int(judged.sum()),
+        "median_neighbour_distance_pixels": float(np.median(distance)),
+    }
+
+
+def density_at(density, points):
+    """Value of a sphere density at unit vectors ``points``.
+
+    Parameters
+    ----------
+    density : CellMap or AnalyticDensity or UniformDensity
+        A map is constant on its cells (column ``j`` starts at ``lon0 + 360 j / W`` degrees east, row 0 at
+        the north pole); an analytic density is its function; anything else is read through ``cell_map()``.
+    points : numpy.ndarray
+        ``(M, 3)`` unit vectors.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(M,)`` density values.
+    """
+    if hasattr(density, "function"):
+        return np.asarray(density.function(points), dtype=np.float64)
+    if not hasattr(density, "values"):
+        return density_at(density.cell_map(), points)
+    rows, columns = density.values.shape
+    theta = np.arccos(np.clip(points[:, 2], -1, 1))
+    phi = np.mod(np.arctan2(points[:, 1], points[:, 0]) - np.radians(density.lon0), 2 * np.pi)
+    row = np.minimum((theta / np.pi * rows).astype(int), rows - 1)
+    column = np.minimum((phi / (2 * np.pi) * columns).astype(int), columns - 1)
+    return density.values[row, column]
+
+
+def sphere_clumps(points, density):
+    """Geodesic nearest-neighbour distance over the hexagonal spacing of ``rho = M w / int w`` (per sr).
+
+    Dots are judged as on the torus (:func:`light_threshold` on the density's cells); the median
+    nearest-neighbour distance (radians) is over all dots.
+    """
+    chords, _ = cKDTree(points).query(points, k=2)
+    distance = 2 * np.arcsin(np.minimum(chords[:, 1] / 2, 1.0))
+    local = density_at(density, points)
+    spacing = hexagonal_spacing(len(points) * local / (4 * np.pi * density.mean))
+    cells = density if hasattr(density, "values") else density.cell_map()
+    judged = local > light_threshold(cells.values, cells.cell_areas)
+    return {
+        "neighbour_distance_over_hexagonal": percentiles(distance[judged] / spacing[judged]),
+        "neighbour_points_judged": int(judged.sum()),
+        "median_neighbour_distance_radians": float(np.median(distance)),
     }
 
 
@@ -177,7 +295,7 @@ def evaluate_torus(problem, points, weights):
         "energy_ratio_to_iid": energy / expected,
         "untruncated_energy": untruncated_energy(problem, points),
         "similarity": image_similarity(weights, points),
-        "neighbour_distance_over_hexagonal": summary(torus_neighbour_ratios(points, weights)),
+        **torus_clumps(points, weights),
     }
     report["spectrum"] = power_spectrum(problem, points)
     report["flat_input"] = bool(np.ptp(weights) <= 1e-12 * max(weights.max(), 1e-300))
@@ -202,4 +320,5 @@ def evaluate_sphere(problem, points, density):
         "max_coefficient_error": coefficient_error,
         "minimum_separation_degrees": float(np.degrees(minimum_separation(points))),
         "cap_discrepancy": cap_discrepancy(points, *cells.centres_and_masses()),
+        **sphere_clumps(points, density),
     }

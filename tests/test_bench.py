@@ -19,3 +19,37 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
     for case in report["cases"]:
         assert case["seconds_per_iteration"] > 0 and case["raw_transform_seconds_per_iteration"] > 0
         assert {"M", "N", "threads", "backend", "transforms_per_iteration"} <= set(case)
+
+
+def load_quality():
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import quality
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    return quality
+
+
+def test_quality_inputs_have_the_documented_properties(tmp_path):
+    import numpy as np
+
+    quality = load_quality()
+    made = {name: make() for inputs in quality.SETS.values() for name, _, _, make in inputs}
+    assert made["strip6x1"].shape == (200, 1200) and made["strip4x1"].shape == (300, 1200)
+    for name in ("silhouette", "silhouette2"):
+        assert set(np.unique(made[name])) == {0.0, 1.0}
+    assert abs(np.mean(made["dark"]) - 0.2) < 1e-6
+    assert abs(np.mean(made["dark2"]) - 0.15) < 1e-6
+    assert abs(made["bump8"].min() - 0.04) < 1e-9
+    assert made["bump8"].max() > 0.99 and abs(made["bump5"].min() - 0.02) < 1e-9
+    for name in ("relief3", "relief4"):
+        assert made[name].min() == 0 and made[name].max() == 1
+    # Crops render the densest region: i.i.d. points of the bump land mostly inside the zoomed window.
+    from stipple.sphere import CellMap
+
+    points = CellMap(made["bump8"]).sample(np.random.default_rng(0), 3000)
+    crop = np.asarray(quality.sphere_crop(points, made["bump8"]))
+    assert crop.shape == (quality.CROP_PIXELS,) * 2 and 0 < np.mean(crop < 128) < 0.5
+    unit = np.random.default_rng(1).random((2000, 2))
+    crop = np.asarray(quality.torus_crop(unit, made["strip6x1"]))
+    assert crop.shape == (quality.CROP_PIXELS,) * 2 and 0 < np.mean(crop < 128) < 0.5

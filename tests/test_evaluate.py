@@ -5,18 +5,22 @@ from click.testing import CliRunner
 from stipple.cli import main
 from stipple.evaluate import (
     cap_discrepancy,
+    density_at,
     discrepancy_energy,
     evaluate_sphere,
     evaluate_torus,
     expected_iid_energy,
     fibonacci_sphere,
+    light_threshold,
     minimum_separation,
     power_spectrum,
     psnr,
+    sphere_clumps,
     ssim,
+    torus_clumps,
     torus_neighbour_ratios,
 )
-from stipple.sphere import BUILTINS, CellMap, sphere_problem, three_gaussians
+from stipple.sphere import BUILTINS, AnalyticDensity, CellMap, from_lon_lat, sphere_problem, three_gaussians
 from stipple.torus import torus_problem
 
 
@@ -131,3 +135,131 @@ def test_evaluate_cli_sphere_and_spectrum(tmp_path):
 
 def test_three_gaussians_positive():
     assert np.all(three_gaussians(fibonacci_sphere(100)) > 0)
+
+
+HEXAGONAL_COLUMNS, HEXAGONAL_ROWS = 15, 26
+
+
+def hexagonal_lattice(shape):
+    """15 x 26 hexagonal lattice in the unit square of a torus of ``shape`` (rows, columns) = 3 : 2.
+
+    Physical box (2/3, 1): x spacing 2/45, row spacing 1/26 (= 2/45 * sqrt(3)/2 * 1.0004), so the nearest
+    neighbour is 2/45 to within 2e-4 and equals the hexagonal spacing of M = 390 points on area 2/3.
+    """
+    assert shape[0] * 2 == shape[1] * 3
+    row = np.arange(HEXAGONAL_ROWS)[:, None]
+    x = (np.arange(HEXAGONAL_COLUMNS)[None, :] + 0.25 + 0.5 * (row % 2)) / HEXAGONAL_COLUMNS
+    y = (row + 0.5 + 0 * x) / HEXAGONAL_ROWS
+    return np.stack([x.ravel(), y.ravel()], axis=1)
+
+
+def test_hexagonal_lattice_has_ratio_one_everywhere():
+    flat = np.ones((30, 20))
+    points = hexagonal_lattice(flat.shape)
+    clumps = torus_clumps(points, flat)
+    for value in clumps["neighbour_distance_over_hexagonal"].values():
+        assert value == pytest.approx(1.0, abs=1e-3)
+    # Pixel units: L = 30 pixels, nearest neighbour 2/45 of L (the row-to-row distance is 2e-4 shorter).
+    assert clumps["median_neighbour_distance_pixels"] == pytest.approx(30 * 2 / 45, rel=1e-3)
+    assert clumps["neighbour_points_judged"] == len(points)
+    report = evaluate_torus(torus_problem(flat, len(points), 16, threads=1), points, flat)
+    assert report["neighbour_distance_over_hexagonal"] == clumps["neighbour_distance_over_hexagonal"]
+
+
+def test_square_lattice_on_a_wide_image_keeps_the_aspect():
+    # 20 x 10 square lattice on a 2:1 image: spacing 1/20 of the long side in both directions.
+    x, y = np.meshgrid((np.arange(20) + 0.5) / 20, (np.arange(10) + 0.5) / 10)
+    points = np.stack([x.ravel(), y.ravel()], axis=1)
+    stats = torus_clumps(points, np.ones((7, 14)))["neighbour_distance_over_hexagonal"]
+    for value in stats.values():
+        assert value == pytest.approx((3 / 4) ** 0.25, rel=1e-12)
+    assert torus_clumps(points, np.ones((7, 14)))["median_neighbour_distance_pixels"] == pytest.approx(14 / 20)
+
+
+def test_clumped_pairs_show_in_the_low_percentiles():
+    flat = np.ones((30, 20))
+    lattice_points = hexagonal_lattice(flat.shape)
+    pairs = lattice_points[::10] + 1e-6
+    stats = torus_clumps(np.concatenate([lattice_points, pairs]), flat)["neighbour_distance_over_hexagonal"]
+    assert stats["min"] < 1e-3 and stats["p01"] < 1e-3 and stats["p05"] < 1e-3
+    # The rest is the lattice, judged against the hexagonal spacing of 390 + 39 points.
+    assert stats["median"] == pytest.approx(np.sqrt(1.1), rel=2e-3)
+
+
+def test_dots_in_blank_or_nearly_blank_pixels_are_not_judged():
+    weights = np.ones((30, 20))
+    weights[:, 10:] = 0.0
+    points = hexagonal_lattice(weights.shape)
+    ratios = torus_neighbour_ratios(points, weights)
+    assert ratios.min() == 0  # infinite spacing where w = 0
+    clumps = torus_clumps(points, weights)
+    assert clumps["neighbour_points_judged"] == np.sum(points[:, 0] < 0.5)
+    # All M dots are due in the left half but only half of them are there: spacing sqrt(2) too wide.
+    assert clumps["neighbour_distance_over_hexagonal"]["min"] == pytest.approx(2**0.5, rel=1e-3)
+    weights[:, 10:] = 1e-3  # 0.1 % of the mass: still below the 1 % left out
+    assert torus_clumps(points, weights)["neighbour_points_judged"] == np.sum(points[:, 0] < 0.5)
+
+
+def test_light_threshold_keeps_ties_together_and_weighs_areas():
+    assert light_threshold(np.array([0.0, 0.0, 1.0, 1.0])) == 0.0
+    assert light_threshold(np.array([0.01, 0.01, 1.0, 1.0])) == 0.01  # 0.99 % of the mass
+    assert light_threshold(np.array([0.02, 0.02, 1.0, 1.0])) == 0.0  # 1.96 %
+    assert light_threshold(np.array([0.001, 0.002, 1.0])) == 0.002
+    assert light_threshold(np.array([0.001, 0.002, 1.0]), np.array([1.0, 10.0, 1.0])) == 0.001
+    assert light_threshold(np.full(10, 0.5)) == 0.0
+
+
+def test_density_at_reads_cells_functions_and_uniform():
+    values = np.arange(12.0).reshape(3, 4) + 1
+    for lon0 in (0.0, -180.0, 45.0):
+        cells = CellMap(values, lon0)
+        latitude = 90 - (np.arange(3)[:, None] + 0.5) * 60 + 0 * np.arange(4)
+        longitude = lon0 + (np.arange(4)[None, :] + 0.5) * 90 + 0 * latitude
+        points = from_lon_lat(longitude.ravel(), latitude.ravel())
+        np.testing.assert_array_equal(density_at(cells, points), values.ravel())
+    points = fibonacci_sphere(50)
+    np.testing.assert_array_equal(density_at(BUILTINS["uniform"], points), np.ones(50))
+    np.testing.assert_array_equal(density_at(AnalyticDensity(three_gaussians), points), three_gaussians(points))
+
+
+def icosahedron():
+    golden = (1 + np.sqrt(5)) / 2
+    vertices = []
+    for a in (-1, 1):
+        for b in (-golden, golden):
+            vertices += [(0, a, b), (a, b, 0), (b, 0, a)]
+    vertices = np.array(vertices, dtype=float)
+    return vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+
+
+def test_sphere_clumps_icosahedron_fibonacci_and_a_duplicate(rng):
+    uniform = BUILTINS["uniform"]
+    # Icosahedron: edge arctan(2) against sqrt(2 / (sqrt(3) * 12 / (4 pi))) for every vertex.
+    clumps = sphere_clumps(icosahedron(), uniform)
+    expected = np.arctan(2) / np.sqrt(8 * np.pi / (12 * np.sqrt(3)))
+    for value in clumps["neighbour_distance_over_hexagonal"].values():
+        assert value == pytest.approx(expected, rel=1e-12)
+    assert clumps["median_neighbour_distance_radians"] == pytest.approx(np.arctan(2))
+    spread = sphere_clumps(fibonacci_sphere(2000), uniform)["neighbour_distance_over_hexagonal"]
+    assert 0.8 < spread["p01"] < spread["median"] < 1.05
+    random = rng.standard_normal((2000, 3))
+    random /= np.linalg.norm(random, axis=1, keepdims=True)
+    assert sphere_clumps(random, uniform)["neighbour_distance_over_hexagonal"]["p01"] < 0.15
+    duplicated = np.concatenate([fibonacci_sphere(2000), fibonacci_sphere(2000)[:1]])
+    assert sphere_clumps(duplicated, uniform)["neighbour_distance_over_hexagonal"]["min"] == 0
+
+
+def test_sphere_clumps_scale_with_the_density_and_skip_empty_cells():
+    # w = 1 on the northern hemisphere, 0 on the southern: only northern dots are judged. The northern half of
+    # a Fibonacci set of 2M has the density M / (2 pi) that w asks for: the ratios of the whole uniform set.
+    cells = CellMap(np.repeat([[1.0], [0.0]], 4, axis=1))
+    points = fibonacci_sphere(4000)
+    clumps = sphere_clumps(points, cells)
+    assert clumps["neighbour_points_judged"] == 2000
+    north = points[points[:, 2] > 0]
+    assert sphere_clumps(north, cells)["neighbour_distance_over_hexagonal"]["median"] == pytest.approx(
+        sphere_clumps(points, BUILTINS["uniform"])["neighbour_distance_over_hexagonal"]["median"],
+        rel=0.02,
+    )
+    report = evaluate_sphere(sphere_problem(cells, len(north), 8, threads=1), north, cells)
+    assert report["neighbour_distance_over_hexagonal"]["p01"] > 0.8
