@@ -99,6 +99,9 @@ class NearField:
         delta = self.geometry.displacement(positions[first], positions[second])
         distance = np.sqrt(np.einsum("ij,ij->i", delta, delta))
         inside = np.flatnonzero(distance < self.kernel.radius)
+        # Pairs in index order, whatever the Verlet list's: the sums then do not depend on where the list was
+        # last rebuilt, so a resumed run reaches the uninterrupted run's points bit for bit.
+        inside = inside[np.argsort(first[inside] * len(points) + second[inside], kind="stable")]
         first, second, delta, distance = first[inside], second[inside], delta[inside], distance[inside]
         value, slope, curvature = self.kernel.values(distance)
         safe = np.maximum(distance, 1e-9 * self.kernel.radius)
