@@ -665,3 +665,8 @@ def format_report(report):
         if key in report:
             lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
     return "\n".join(lines)
+
+
+from .cli_colour import colour  # noqa: E402  (defined beside, registered here)
+
+main.add_command(colour)

@@ -1,4 +1,4 @@
-"""Colour separation: an RGB image as one ink density per class of dots, and the dots each class gets.
+"""Colour separation: an RGB image as one ink density per class of dots, halftoned jointly.
 
 Inks are subtractive and dots do not overlap, so the coverages of the classes add up: cyan, magenta and yellow
 are ``c = 1 - R``, ``m = 1 - G``, ``y = 1 - B``; with black (``cmyk``) the grey component
@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import StippleError
+from .inputs import load_colour
+from .multiclass import multiclass_problem, run
 
 SEPARATIONS = ("cmyk", "cmy", "gray")
 INK_COLOURS = {
@@ -72,30 +74,57 @@ def separate(rgb, separation="cmyk", black=1.0):
     return layers
 
 
-def class_counts(masses, total):
-    """Dots per class in proportion to the masses, rounded by largest remainder (Hamilton's method).
-
-    Every count is the quota ``total * mass / sum(masses)`` rounded down or up, and the counts add up to
-    ``total``; the remainders are handed out largest first (ties to the earlier class).
+def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.0, union_weight=1.0, **options):
+    """The joint halftoning problem of an RGB image's inks: ``(layers, problem)``.
 
     Parameters
     ----------
-    masses : sequence of float
-        Non-negative masses, at least one positive.
-    total : int
-        Number of dots to share out.
+    rgb : numpy.ndarray or path
+        ``(H, W, 3)`` colours in [0, 1], or an image file (``stipple.inputs.load_colour``).
+    n_points : int
+        Dots in all; each ink gets its share by mass (``stipple.multiclass.class_counts``).
+    bandwidth : int, optional
+        The union's bandwidth (see ``stipple.multiclass.multiclass_problem``).
+    separation, black :
+        See ``separate``.
+    union_weight : float
+        Factor of the union's term against the inks' (1: Wei's and Schmaltz et al.'s equal weights; 0: each
+        ink alone, so dots of different inks may clump). A single ink has no union term.
+    **options
+        ``backend``, ``threads``, ``epsilon``, ``hessian``, ``near_field`` for every term.
 
     Returns
     -------
-    numpy.ndarray
-        Integer counts, one per class.
+    tuple
+        The layers that got dots (``Layer``, in the order of ``problem.slices``) and the ``MulticlassProblem``.
     """
-    masses = np.asarray(masses, dtype=np.float64)
-    if masses.ndim != 1 or np.any(masses < 0) or not masses.sum() > 0 or not np.all(np.isfinite(masses)):
-        raise StippleError("class masses must be finite, non-negative and not all zero")
-    quotas = total * masses / masses.sum()
-    counts = np.floor(quotas).astype(int)
-    remainders = quotas - counts
-    order = np.argsort(-remainders, kind="stable")
-    counts[order[: total - counts.sum()]] += 1
-    return counts
+    if not isinstance(rgb, np.ndarray):
+        rgb = load_colour(rgb)
+    layers = separate(rgb, separation, black)
+    if not (np.isfinite(union_weight) and union_weight >= 0):
+        raise StippleError(f"union weight must be a finite non-negative number, not {union_weight!r}")
+    term_weights = [1.0] * len(layers) + [float(union_weight) if len(layers) > 1 else 0.0]
+    problem = multiclass_problem(
+        [layer.density for layer in layers],
+        n_points,
+        bandwidth,
+        names=[layer.name for layer in layers],
+        term_weights=term_weights,
+        **options,
+    )
+    problem.settings.update(separation=separation, black=float(black))
+    return [layer for layer in layers if layer.name in problem.names], problem
+
+
+def halftone_colour(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.0, union_weight=1.0, **options):
+    """Stipple an RGB image with one class of dots per ink: ``(layers, problem, result)``.
+
+    Ink ``c``'s dots are ``result.points[problem.slices[c]]`` (unit coordinates, x right, y down). ``options``
+    are ``colour_problem``'s and ``stipple.halftone.run``'s (``init``, ``seed``, ``tol``, ``iterations``, ...).
+    """
+    problem_keys = ("backend", "threads", "epsilon", "hessian", "near_field")
+    problem_options = {key: options.pop(key) for key in problem_keys if key in options}
+    layers, problem = colour_problem(
+        rgb, n_points, bandwidth, separation=separation, black=black, union_weight=union_weight, **problem_options
+    )
+    return layers, problem, run(problem, **options)

@@ -16,10 +16,38 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .colour import class_counts
 from .errors import StippleError
 from .halftone import Problem, check_bandwidth, run
 from .torus import DEFAULT_EPSILON, check_weights, default_bandwidth, torus_problem
+
+
+def class_counts(masses, total):
+    """Dots per class in proportion to the masses, rounded by largest remainder (Hamilton's method).
+
+    Every count is the quota ``total * mass / sum(masses)`` rounded down or up, and the counts add up to
+    ``total``; the remainders are handed out largest first (ties to the earlier class).
+
+    Parameters
+    ----------
+    masses : sequence of float
+        Non-negative masses, at least one positive.
+    total : int
+        Number of dots to share out.
+
+    Returns
+    -------
+    numpy.ndarray
+        Integer counts, one per class.
+    """
+    masses = np.asarray(masses, dtype=np.float64)
+    if masses.ndim != 1 or np.any(masses < 0) or not masses.sum() > 0 or not np.all(np.isfinite(masses)):
+        raise StippleError("class masses must be finite, non-negative and not all zero")
+    quotas = total * masses / masses.sum()
+    counts = np.floor(quotas).astype(int)
+    remainders = quotas - counts
+    order = np.argsort(-remainders, kind="stable")
+    counts[order[: total - counts.sum()]] += 1
+    return counts
 
 
 class MulticlassObjective:
@@ -44,16 +72,13 @@ class MulticlassObjective:
         self._shape = None
 
     def set_points(self, points):
+        """Move every term with a non-zero factor to its points."""
         self._shape = points.shape
-        for term, part in zip(self.terms, self.slices, strict=True):
+        for term, part, _ in self._weighted():
             term.set_points(points[part])
 
-    def term_energies(self):
-        """Each term's energy, without its factor."""
-        return [term.energy() for term in self.terms]
-
     def energy(self):
-        return float(sum(weight * value for weight, value in zip(self.weights, self.term_energies(), strict=True)))
+        return float(sum(weight * term.energy() for term, _, weight in self._weighted()))
 
     def gradient(self):
         total = np.zeros(self._shape)

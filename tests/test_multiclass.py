@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 from conftest import taylor_slope
 
-from stipple.colour import class_counts, separate
+from stipple.colour import separate
 from stipple.errors import StippleError
 from stipple.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
 from stipple.halftone import run
-from stipple.multiclass import class_bandwidth, halftone_classes, multiclass_problem
+from stipple.multiclass import class_bandwidth, class_counts, halftone_classes, multiclass_problem
 from stipple.torus import halftone_torus, torus_problem
 
 STEPS = np.logspace(-3, -4.5, 6)
