@@ -116,10 +116,11 @@ class NearField:
     def _update_candidates(self, positions):
         """Candidate pairs for the current positions: the Verlet list, patched for the few points that moved far.
 
-        Pairs within ``radius (1 + skin)`` at the reference positions contain every pair now within the radius
-        unless one of its points moved more than ``radius skin / 2`` (a "mover"). Pairs of movers are taken again
-        from the reference tree (around their current positions) and among themselves; the whole list is searched
-        again when movers are more than 1 % of the points (at most 256).
+        Pairs are kept in index order (``_ordered``). Pairs within ``radius (1 + skin)`` at the reference
+        positions contain every pair now within the radius unless one of its points moved more than
+        ``radius skin / 2`` (a "mover"). Pairs of movers are taken again from the reference tree (around their
+        current positions) and among themselves; the whole list is searched again when movers are more than
+        1 % of the points (at most 256).
         """
         if self._reference is None or len(self._reference) != len(positions):
             return self._search(positions)
@@ -140,16 +141,18 @@ class NearField:
         near_second = np.concatenate([np.asarray(items, dtype=np.intp) for items in found] + [np.empty(0, np.intp)])
         others = ~is_mover[near_second]
         among_first, among_second = np.triu_indices(movers.size, 1)
-        self._candidates = (
-            np.concatenate([first[settled], near_first[others], movers[among_first]]),
-            np.concatenate([second[settled], near_second[others], movers[among_second]]),
+        added = _ordered(
+            np.concatenate([near_first[others], movers[among_first]]),
+            np.concatenate([near_second[others], movers[among_second]]),
+            len(positions),
         )
+        self._candidates = _merge_ordered((first[settled], second[settled]), added, len(positions))
 
     def _search(self, positions):
         """A new Verlet list: all pairs within ``radius (1 + skin)``, and the tree for later patches."""
         self._tree = self.geometry.tree(positions)
         found = self._tree.query_pairs(self.kernel.radius * (1 + self.skin), output_type="ndarray")
-        self._verlet = self._candidates = (found[:, 0], found[:, 1])
+        self._verlet = self._candidates = _ordered(found[:, 0], found[:, 1], len(positions))
         self._reference = positions.copy()
         self.counts["pair_searches"] += 1
 
@@ -220,3 +223,18 @@ class NearField:
     def _weingarten_vector(self, vector):
         weights = self._curvature_weights()
         return 0.0 if weights is None else weights[:, None] * vector
+
+
+def _ordered(first, second, count):
+    """Pairs as ``(min, max)``, sorted: the sums then do not depend on how the list was found (so a resumed run,
+    which searches its list afresh, repeats the uninterrupted run bit for bit)."""
+    low, high = np.minimum(first, second), np.maximum(first, second)
+    order = np.argsort(low.astype(np.int64) * count + high, kind="stable")
+    return low[order], high[order]
+
+
+def _merge_ordered(pairs, added, count):
+    """Two sorted pair lists with no pair in common as one sorted list."""
+    keys = pairs[0].astype(np.int64) * count + pairs[1]
+    where = np.searchsorted(keys, added[0].astype(np.int64) * count + added[1])
+    return np.insert(pairs[0], where, added[0]), np.insert(pairs[1], where, added[1])
