@@ -185,7 +185,7 @@ class NearKernel:
         previous, current = np.ones_like(t), t.copy()
         coeffs[0] = integrand.sum()
         for n in range(1, lmax + 1):
-            coeffs[n] = np.dot(integrand, current)
+            coeffs[n] = np.einsum("i,i->", integrand, current)
             previous, current = current, ((2 * n + 1) * t * current - n * previous) / (n + 1)
         return 2 * np.pi * coeffs
 

@@ -7,7 +7,8 @@ the part supported in a ball of radius ``eps``, as the pair energy
     E_near(p) = lam² sum_{i, j} K_near(p_i - p_j)        (``i = j`` included: a constant)
 
 with neighbours found by a k-d tree (periodic on the torus, chordal distance on the sphere) and kept in a Verlet
-list: pairs within ``eps (1 + skin)`` are searched again only when a point has moved more than ``eps skin / 2``.
+list: pairs within ``eps (1 + skin)`` are searched again only when many points have moved more than
+``eps skin / 2``; the few that did are looked up on their own.
 """
 
 import numpy as np
@@ -23,9 +24,8 @@ class TorusPairs:
     def positions(self, points):
         return np.mod(points, 1.0) * self.scale
 
-    def pairs(self, positions, radius):
-        tree = cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
-        return tree.query_pairs(radius, output_type="ndarray")
+    def tree(self, positions):
+        return cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
 
     def displacement(self, start, end):
         """Shortest periodic displacement from ``end`` to ``start`` (``start - end``), row by row."""
@@ -48,8 +48,8 @@ class SpherePairs:
     def positions(self, points):
         return points
 
-    def pairs(self, positions, radius):
-        return cKDTree(positions).query_pairs(radius, output_type="ndarray")
+    def tree(self, positions):
+        return cKDTree(positions)
 
     def displacement(self, start, end):
         return start - end
@@ -99,9 +99,6 @@ class NearField:
         delta = self.geometry.displacement(positions[first], positions[second])
         distance = np.sqrt(np.einsum("ij,ij->i", delta, delta))
         inside = np.flatnonzero(distance < self.kernel.radius)
-        # Pairs in index order, whatever the Verlet list's: the sums then do not depend on where the list was
-        # last rebuilt, so a resumed run reaches the uninterrupted run's points bit for bit.
-        inside = inside[np.argsort(first[inside] * len(points) + second[inside], kind="stable")]
         first, second, delta, distance = first[inside], second[inside], delta[inside], distance[inside]
         value, slope, curvature = self.kernel.values(distance)
         safe = np.maximum(distance, 1e-9 * self.kernel.radius)
@@ -117,13 +114,45 @@ class NearField:
         self._gradient = None
 
     def _update_candidates(self, positions):
-        """Search pairs within ``radius (1 + skin)`` again once some point moved more than ``radius skin / 2``."""
-        if self._reference is not None and len(self._reference) == len(positions):
-            moved = self.geometry.displacement(positions, self._reference)
-            if np.max(np.einsum("ij,ij->i", moved, moved), initial=0.0) < (self.kernel.radius * self.skin / 2) ** 2:
-                return
-        found = self.geometry.pairs(positions, self.kernel.radius * (1 + self.skin))
-        self._candidates = (found[:, 0], found[:, 1])
+        """Candidate pairs for the current positions: the Verlet list, patched for the few points that moved far.
+
+        Pairs are kept in index order (``_ordered``). Pairs within ``radius (1 + skin)`` at the reference
+        positions contain every pair now within the radius unless one of its points moved more than
+        ``radius skin / 2`` (a "mover"). Pairs of movers are taken again from the reference tree (around their
+        current positions) and among themselves; the whole list is searched again when movers are more than
+        1 % of the points (at most 256).
+        """
+        if self._reference is None or len(self._reference) != len(positions):
+            return self._search(positions)
+        moved = self.geometry.displacement(positions, self._reference)
+        limit = self.kernel.radius * self.skin / 2
+        movers = np.flatnonzero(np.einsum("ij,ij->i", moved, moved) > limit**2)
+        if movers.size > min(max(16, 0.01 * len(positions)), 256):
+            return self._search(positions)
+        first, second = self._verlet
+        if movers.size == 0:
+            self._candidates = self._verlet
+            return
+        is_mover = np.zeros(len(positions), dtype=bool)
+        is_mover[movers] = True
+        settled = ~(is_mover[first] | is_mover[second])
+        found = self._tree.query_ball_point(positions[movers], self.kernel.radius + limit)
+        near_first = np.repeat(movers, [len(items) for items in found])
+        near_second = np.concatenate([np.asarray(items, dtype=np.intp) for items in found] + [np.empty(0, np.intp)])
+        others = ~is_mover[near_second]
+        among_first, among_second = np.triu_indices(movers.size, 1)
+        added = _ordered(
+            np.concatenate([near_first[others], movers[among_first]]),
+            np.concatenate([near_second[others], movers[among_second]]),
+            len(positions),
+        )
+        self._candidates = _merge_ordered((first[settled], second[settled]), added, len(positions))
+
+    def _search(self, positions):
+        """A new Verlet list: all pairs within ``radius (1 + skin)``, and the tree for later patches."""
+        self._tree = self.geometry.tree(positions)
+        found = self._tree.query_pairs(self.kernel.radius * (1 + self.skin), output_type="ndarray")
+        self._verlet = self._candidates = _ordered(found[:, 0], found[:, 1], len(positions))
         self._reference = positions.copy()
         self.counts["pair_searches"] += 1
 
@@ -165,8 +194,8 @@ class NearField:
         for a in range(count):
             for b in range(a, count):
                 (ra, da), (rb, db) = components[a], components[b]
-                across = np.dot(self._tangential, np.einsum("ij,ij->i", da, db))
-                along = np.dot(self._radial_excess, ra * rb)
+                across = np.einsum("i,ij,ij->", self._tangential, da, db)
+                along = np.einsum("i,i,i->", self._radial_excess, ra, rb)
                 gram[a, b] = gram[b, a] = self.pair_factor * (across + along) + self._weingarten(vectors[a], vectors[b])
         return gram
 
@@ -189,8 +218,23 @@ class NearField:
 
     def _weingarten(self, u, v):
         weights = self._curvature_weights()
-        return 0.0 if weights is None else float(np.dot(weights, np.einsum("ij,ij->i", u, v)))
+        return 0.0 if weights is None else float(np.einsum("i,ij,ij->", weights, u, v))
 
     def _weingarten_vector(self, vector):
         weights = self._curvature_weights()
         return 0.0 if weights is None else weights[:, None] * vector
+
+
+def _ordered(first, second, count):
+    """Pairs as ``(min, max)``, sorted: the sums then do not depend on how the list was found (so a resumed run,
+    which searches its list afresh, repeats the uninterrupted run bit for bit)."""
+    low, high = np.minimum(first, second), np.maximum(first, second)
+    order = np.argsort(low.astype(np.int64) * count + high, kind="stable")
+    return low[order], high[order]
+
+
+def _merge_ordered(pairs, added, count):
+    """Two sorted pair lists with no pair in common as one sorted list."""
+    keys = pairs[0].astype(np.int64) * count + pairs[1]
+    where = np.searchsorted(keys, added[0].astype(np.int64) * count + added[1])
+    return np.insert(pairs[0], where, added[0]), np.insert(pairs[1], where, added[1])
