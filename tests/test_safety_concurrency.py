@@ -1,0 +1,106 @@
+"""One run per checkpoint: a second run on the same checkpoint is refused while the first holds it."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from safety_helpers import FAST, ROOT, invoke, leftovers, make_image, refused
+
+from stipple.safety import CheckpointLock
+
+
+@pytest.fixture
+def folder(tmp_path):
+    make_image(tmp_path / "in.png")
+    return tmp_path
+
+
+def test_a_held_checkpoint_refuses_a_fresh_run(folder):
+    with CheckpointLock(folder / "run.npz"):
+        refused(
+            ["torus", "in.png", *FAST, "--checkpoint", "run.npz", "-o", "a.csv"],
+            folder,
+            "run.npz: checkpoint is in use",
+        )
+    assert not (folder / "run.npz").exists()
+
+
+def test_a_held_checkpoint_refuses_a_resume_and_stays_whole(folder):
+    assert invoke(["torus", "in.png", *FAST, "--checkpoint", "run.npz", "-o", "a.csv"], folder).exit_code == 0
+    args = [
+        "torus",
+        "in.png",
+        *FAST[:4],
+        "--iterations",
+        "4",
+        "-q",
+        "--checkpoint",
+        "run.npz",
+        "--resume",
+        "-o",
+        "a.csv",
+    ]
+    with CheckpointLock(folder / "run.npz"):
+        refused(args, folder, "in use by another stipple run")
+    assert invoke(args, folder).exit_code == 0
+    assert leftovers(folder) == []
+
+
+def test_the_lock_is_exclusive_and_released():
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as directory:
+        path = f"{directory}/x.npz"
+        with CheckpointLock(path) as first:
+            with pytest.raises(ValueError, match="in use"):
+                CheckpointLock(path).acquire()
+            assert first.handle is not None
+        with CheckpointLock(path):
+            pass
+        assert leftovers(directory) == []
+
+
+RACE = ["torus", str(ROOT / "samples" / "camera128.png"), "-M", "2000", "-N", "128", "--tol", "1e-14", "-q"]
+
+
+def test_two_processes_started_together_on_one_checkpoint(tmp_path):
+    """Both start at once: exactly one runs, the other is refused naming the file; the checkpoint is the winner's."""
+    checkpoint = tmp_path / "shared.npz"
+    processes = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "stipple",
+                *RACE,
+                "--time-limit",
+                "3",
+                "--iterations",
+                "100000",
+                "--seed",
+                str(seed),
+                "--checkpoint",
+                str(checkpoint),
+                "-o",
+                str(tmp_path / f"dots{seed}.csv"),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=tmp_path,
+        )
+        for seed in (1, 2)
+    ]
+    results = [(process.wait(timeout=120), process.stderr.read()) for process in processes]
+    codes = sorted(code for code, _ in results)
+    assert codes == [0, 1], results
+    winner = [seed for seed, (code, _) in zip((1, 2), results, strict=True) if code == 0][0]
+    loser_message = [text for code, text in results if code == 1][0]
+    assert f"{checkpoint}: checkpoint is in use by another stipple run" in loser_message
+    assert len(loser_message.strip().splitlines()) == 1 and "Traceback" not in loser_message
+    assert not (tmp_path / f"dots{3 - winner}.csv").exists()
+    saved = np.load(checkpoint)["points"] * 128
+    written = np.loadtxt(tmp_path / f"dots{winner}.csv", delimiter=",", skiprows=1)
+    assert np.allclose(saved, written, atol=1e-5)
+    assert leftovers(tmp_path) == []
