@@ -147,8 +147,9 @@ class _MemberReader:
     def value(self, name, limit, shape, kinds):
         from .inputs import load_array
 
+        data = self.raw(name, limit)
         try:
-            array = load_array(self.raw(name, limit), name, kinds=kinds)
+            array = load_array(data, name, kinds=kinds)
         except StippleError as error:
             raise StippleError(f"{self.path}: corrupt checkpoint ({error})") from None
         if array.shape != shape:
