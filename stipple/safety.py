@@ -68,7 +68,7 @@ class CheckpointLock:
 
     def __init__(self, checkpoint):
         self.checkpoint = str(checkpoint)
-        directory, name = os.path.split(os.path.abspath(self.checkpoint))
+        directory, name = os.path.split(os.path.realpath(self.checkpoint))  # one lock for every spelling
         self.path = os.path.join(directory, f".{name}.lock")
         self.handle = None
 

@@ -1,5 +1,6 @@
 """One run per checkpoint: a second run on the same checkpoint is refused while the first holds it."""
 
+import os
 import subprocess
 import sys
 
@@ -45,6 +46,15 @@ def test_a_held_checkpoint_refuses_a_resume_and_stays_whole(folder):
         refused(args, folder, "in use by another stipple run")
     assert invoke(args, folder).exit_code == 0
     assert leftovers(folder) == []
+
+
+def test_the_lock_holds_for_every_spelling_of_the_path(folder):
+    os.symlink("real.npz", folder / "link.npz")
+    (folder / "sub").mkdir()
+    with CheckpointLock(folder / "real.npz"):
+        for spelling in ("link.npz", "sub/../real.npz", str(folder / "real.npz")):
+            args = ["torus", "in.png", *FAST, "--checkpoint", spelling, "-o", "a.csv"]
+            refused(args, folder, "checkpoint is in use by another stipple run")
 
 
 def test_the_lock_is_exclusive_and_released():
