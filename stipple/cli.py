@@ -18,7 +18,7 @@ import numpy as np
 from . import __version__
 from .config import load_config
 from .errors import StippleError
-from .halftone import check_integer
+from .halftone import MAX_POINTS, check_integer
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
 from .transforms import BACKENDS
@@ -603,7 +603,10 @@ def read_points(source):
     def table(names):
         stream = io.BytesIO(data)
         stream.name = name
-        return read_points_csv(stream, names)
+        points = read_points_csv(stream, names)
+        if len(points) > MAX_POINTS:
+            raise StippleError(f"{name}: {len(points)} points; at most {MAX_POINTS} are read")
+        return points
 
     if {"x", "y", "z"} <= columns:
         return "sphere", unit_rows(table(("x", "y", "z")), name)

@@ -79,6 +79,11 @@ def _gray_values(image, name):
         return np.asarray(image, dtype=np.float64) / 65535.0
     if image.mode == "I":
         values = np.asarray(image, dtype=np.float64)
+        if values.min(initial=0) < 0 or values.max(initial=0) > 65535:
+            raise StippleError(
+                f"{name}: 32-bit integer image values must lie in [0, 255] or [0, 65535], "
+                f"not [{values.min():g}, {values.max():g}]"
+            )
         return values / (65535.0 if values.max(initial=0) > 255 else 255.0)
     if image.mode == "F":
         return _float_gray(np.asarray(image, dtype=np.float64), name)
@@ -148,6 +153,8 @@ def _npy_header(data, name):
         if isinstance(error, StippleError):
             raise
         raise StippleError(f"{name}: corrupt or truncated .npy file ({error})") from None
+    if any(size < 0 for size in shape):
+        raise StippleError(f"{name}: corrupt .npy file (negative size in shape {shape})")
     return tuple(int(size) for size in shape), bool(fortran), dtype, stream.tell()
 
 

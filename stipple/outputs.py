@@ -40,6 +40,8 @@ def check_writable(path):
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
+        raise StippleError(f"{path}: is read-only; make it writable or choose another name")
     try:
         with tempfile.TemporaryFile(dir=directory):
             pass

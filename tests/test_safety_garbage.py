@@ -104,3 +104,19 @@ def test_checkpoint_iteration_out_of_range(folder, iteration):
     np.savez(folder / "c.npz", **contents)
     args = ["torus", "in.png", *FAST[:4], "--iterations", "5", "-q", "--checkpoint", "c.npz", "--resume"]
     refused([*args, "-o", "out.csv"], folder, f"iteration {iteration} is outside [0, 1000000000]")
+
+
+def test_npy_with_a_negative_size_in_its_shape(folder):
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (-1, 4), }"
+    header += " " * (63 - (10 + len(header)) % 64) + "\n"
+    data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + b"\0" * 64
+    (folder / "neg.npy").write_bytes(data)
+    refused(["torus", "neg.npy", *FAST, "-o", "out.csv"], folder, "negative size in shape (-1, 4)")
+
+
+def test_integer_images_out_of_range(folder):
+    values = np.array([[-5, 100000], [3, 4]], dtype=np.int32)
+    Image.fromarray(values, mode="I").save(folder / "i32.tiff")
+    refused(
+        ["torus", "i32.tiff", *FAST, "-o", "out.csv"], folder, "must lie in [0, 255] or [0, 65535], not [-5, 100000]"
+    )

@@ -72,3 +72,8 @@ def test_distinct_outputs_still_work(folder):
     assert result.exit_code == 0, result.output
     assert (folder / "new.csv").read_text().startswith("x,y\n")
     assert (folder / "old.svg").read_text() != "<svg>keep me</svg>\n"
+
+
+def test_read_only_outputs_are_not_replaced(folder):
+    (folder / "old.svg").chmod(0o444)
+    refused(["torus", "in.png", *FAST, "-o", "old.svg"], folder, "old.svg: is read-only")
