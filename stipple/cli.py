@@ -747,6 +747,7 @@ def evaluate(
         if json_path == "-" and spectrum_path == "-":
             raise StippleError("'-' (stdout) may be given only once")
         reports = [(role, path) for role, path in (("--json", json_path), ("--spectrum", spectrum_path)) if path]
+        reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
         with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
             domain, points = read_points(points_source)
             if len(points) < 2:

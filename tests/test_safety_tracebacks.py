@@ -172,3 +172,21 @@ def test_a_two_gigabyte_member_is_not_inflated(folder, checkpoint):
     data[entry + 24 : entry + 28] = (2**31).to_bytes(4, "little")  # uncompressed size in the central directory
     (folder / "bad.npz").write_bytes(bytes(data))
     refused([*RESUME, "--checkpoint", "bad.npz"], folder, "member points holds 2147483648 bytes")
+
+
+@pytest.mark.parametrize("command", [["torus", "in.png", *FAST], ["evaluate", "p.csv", "in.png"]])
+def test_closed_stdout_is_refused_before_the_work(folder, command):
+    import os
+
+    before = snapshot(folder)
+    result = subprocess.run(
+        [sys.executable, "-m", "stipple", *command],
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: os.close(1),
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
+    assert snapshot(folder) == before
