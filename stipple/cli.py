@@ -1,7 +1,8 @@
 """Command-line interface: parses options, builds the problem, runs it, writes outputs.
 
-Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage (click's own); 130 / 143 after
-SIGINT / SIGTERM (a checkpoint and the outputs reached so far are written first).
+Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 after SIGINT / SIGTERM
+(during the optimisation a first signal writes the checkpoint and the outputs reached so far; any other
+signal removes every temporary file and leaves every output whole or untouched). Every error is one line.
 """
 
 import contextlib

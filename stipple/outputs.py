@@ -1,4 +1,4 @@
-"""Writing dots: CSV, SVG, PNG and GeoJSON, always atomically (temporary file, fsync, rename)."""
+"""Writing dots: CSV, SVG, PNG and GeoJSON, all-or-nothing (every temporary file fsynced, then all renamed)."""
 
 import contextlib
 import io
