@@ -62,16 +62,18 @@ class SignalGuard:
 
     While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
     iteration, so that the checkpoint and the outputs reached so far are written; any other signal
-    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143).
+    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143);
+    signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short.
     """
 
     def __init__(self):
         self.signal = None
         self.deferring = False
+        self.unwinding = False
         self._previous = {}
 
     def __enter__(self):
-        self.signal, self.deferring = None, False
+        self.signal, self.deferring, self.unwinding = None, False, False
         for number in (signal.SIGINT, signal.SIGTERM):
             try:
                 self._previous[number] = signal.signal(number, self._handle)
@@ -88,6 +90,9 @@ class SignalGuard:
         if self.deferring and self.signal is None:
             self.signal = number
             return
+        if self.unwinding:  # already on the way out: let the cleanup finish
+            return
+        self.unwinding = True
         raise Interrupted(number)
 
     @contextlib.contextmanager

@@ -3,6 +3,7 @@
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -73,19 +74,32 @@ def test_the_lock_is_exclusive_and_released():
 
 RACE = ["torus", str(ROOT / "samples" / "camera128.png"), "-M", "2000", "-N", "128", "--tol", "1e-14", "-q"]
 
+# Both children import everything first, then wait for the same go-file, so that they reach the lock
+# within milliseconds of each other however loaded the machine is.
+STARTER = """
+import os, sys, time
+import stipple.cli, stipple.torus, stipple.checkpoint
+go = sys.argv[1]
+while not os.path.exists(go):
+    time.sleep(0.001)
+sys.argv = ["stipple"] + sys.argv[2:]
+stipple.cli.main(prog_name="stipple")
+"""
+
 
 def test_two_processes_started_together_on_one_checkpoint(tmp_path):
     """Both start at once: exactly one runs, the other is refused naming the file; the checkpoint is the winner's."""
-    checkpoint = tmp_path / "shared.npz"
+    checkpoint, go = tmp_path / "shared.npz", tmp_path / "go"
     processes = [
         subprocess.Popen(
             [
                 sys.executable,
-                "-m",
-                "stipple",
+                "-c",
+                STARTER,
+                str(go),
                 *RACE,
                 "--time-limit",
-                "3",
+                "2",
                 "--iterations",
                 "100000",
                 "--seed",
@@ -102,6 +116,8 @@ def test_two_processes_started_together_on_one_checkpoint(tmp_path):
         )
         for seed in (1, 2)
     ]
+    time.sleep(1.0)  # let both finish importing (they wait for the go-file in any case)
+    go.touch()
     results = [(process.wait(timeout=120), process.stderr.read()) for process in processes]
     codes = sorted(code for code, _ in results)
     assert codes == [0, 1], results
