@@ -4,10 +4,19 @@ import time
 
 import click
 
-from .cli import common_options, finish, physical_centres, plot_order, render_settings, solve
+from .cli import (
+    common_options,
+    finish,
+    guarded_files,
+    physical_centres,
+    plot_order,
+    render_settings,
+    solve,
+    write_outputs,
+)
 from .colour import SEPARATIONS
 from .errors import StippleError
-from .outputs import parse_length
+from .outputs import output_format, parse_length
 from .plotter import DOT_STYLES
 from .transforms import BACKENDS
 
@@ -65,34 +74,35 @@ def colour(ctx, image, **options):
         check_colour_options(options)
         settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
         pen_width = parse_length(options["pen_width"])
-        prepare(options)
-        rgb = load_colour(image)
-        layers, problem = colour_problem(
-            rgb,
-            options["n_points"],
-            options["bandwidth"],
-            separation=options["separation"],
-            black=options["black"],
-            union_weight=options["union_weight"],
-            backend=options["backend"],
-            threads=options["threads"],
-            epsilon=options["epsilon"] or DEFAULT_EPSILON,
-            hessian=options["hessian"],
-            near_field=options["near_field"] is not False,
-        )
-        result, stopped_by = solve(problem, options, options["init"])
-        shape = rgb.shape[:2]
-        placed = [
-            (layer.name, layer.colour, ordered(result.points[part], shape, settings, options))
-            for layer, part in zip(layers, problem.slices, strict=True)
-        ]
-        ink = sum(layer.density for layer in layers).mean()
-        write(
-            options["outputs"],
-            lambda fmt: layered_torus_output(
-                placed, shape, fmt, ink=ink, dot_style=options["dot_style"], pen_width=pen_width, **settings
-            ),
-        )
+        with guarded_files([("image", image)], options["outputs"], options["checkpoint"]):
+            rgb = load_colour(image)
+            check_png(options, rgb.shape[1::-1])
+            layers, problem = colour_problem(
+                rgb,
+                options["n_points"],
+                options["bandwidth"],
+                separation=options["separation"],
+                black=options["black"],
+                union_weight=options["union_weight"],
+                backend=options["backend"],
+                threads=options["threads"],
+                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+                hessian=options["hessian"],
+                near_field=options["near_field"] is not False,
+            )
+            result, stopped_by = solve(problem, options, options["init"])
+            shape = rgb.shape[:2]
+            placed = [
+                (layer.name, layer.colour, ordered(result.points[part], shape, settings, options))
+                for layer, part in zip(layers, problem.slices, strict=True)
+            ]
+            ink = sum(layer.density for layer in layers).mean()
+            write_outputs(
+                options["outputs"],
+                lambda fmt: layered_torus_output(
+                    placed, shape, fmt, ink=ink, dot_style=options["dot_style"], pen_width=pen_width, **settings
+                ),
+            )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
@@ -106,17 +116,12 @@ def check_colour_options(options):
         raise StippleError("--gamma is for gray images and maps, not colour separation")
 
 
-def prepare(options):
-    """Check the outputs and the checkpoint before any work (the shared CLI's own check)."""
-    from .cli import prepare_outputs
+def check_png(options, canvas):
+    """Refuse, before the run, a PNG output too large to draw: the inks' picture holds about 33 bytes a pixel."""
+    from .outputs import check_png_canvas, default_png_width
 
-    prepare_outputs(options["outputs"], options["checkpoint"])
-
-
-def write(paths, render):
-    from .cli import write_outputs
-
-    write_outputs(paths, render)
+    if ".png" in [output_format(path) for path in options["outputs"]]:
+        check_png_canvas(canvas, options["png_width"] or default_png_width(options["n_points"]), layers=33)
 
 
 def ordered(points, shape, settings, options):
