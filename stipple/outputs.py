@@ -376,7 +376,8 @@ def sphere_output(
     if fmt == ".csv":
         if coords == "xyz":
             return csv_bytes(list(points.T), ["x", "y", "z"], number_format=".17g")
-        return csv_bytes([longitude, latitude], ["lon", "lat"])
+        # Round-trip digits: 6 decimals of a degree would cap a spherical design's error near 6e-8.
+        return csv_bytes([longitude, latitude], ["lon", "lat"], number_format=".17g")
     if fmt in (".geojson", ".json"):
         return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
     angular_radius = 2 * np.sqrt((0.5 if ink is None else ink) / len(points))
