@@ -79,15 +79,18 @@ class NearField:
         tangential curvatures of each pair, so that the Newton step of CG stays a descent step.
     skin : float
         Verlet-list margin as a fraction of the radius.
+    exclude : callable, optional
+        ``exclude(first, second) -> bool array``: index pairs left out of the sum (e.g. neighbours along a curve).
     """
 
-    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3):
+    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3, exclude=None):
         self.kernel = kernel
         self.geometry = geometry
         self.pair_factor = 2 * weight**2 * factor
         self.self_energy_per_point = weight**2 * factor * float(kernel.values(np.zeros(1))[0][0])
         self.hessian = hessian
         self.skin = skin
+        self.exclude = exclude
         self._reference = None
         self.counts = {"pair_searches": 0}
 
@@ -120,6 +123,8 @@ class NearField:
             if np.max(np.einsum("ij,ij->i", moved, moved), initial=0.0) < (self.kernel.radius * self.skin / 2) ** 2:
                 return
         found = self.geometry.pairs(positions, self.kernel.radius * (1 + self.skin))
+        if self.exclude is not None:
+            found = found[~self.exclude(found[:, 0], found[:, 1])]
         self._candidates = (found[:, 0], found[:, 1])
         self._reference = positions.copy()
         self.counts["pair_searches"] += 1
