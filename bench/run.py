@@ -1,13 +1,15 @@
 """Benchmarks: seconds per CG iteration against the raw transforms one iteration needs.
 
-Writes JSON (``--output``) with, per case: M, N, backend, threads, median seconds per iteration,
-median seconds of the raw transforms of one iteration (measured in the same run), their ratio,
-transform counts per iteration, and library versions. Quote medians; compare ratios within one run.
+Writes JSON (``--output``) with, per case: M, N, backend, threads, near field on or off (with its pair count),
+median seconds per iteration, median seconds of the raw transforms of one iteration (measured in the same run),
+their ratio, transform counts per iteration, the process's peak memory so far, and library versions. Each
+near-field case is run beside the same problem without it. Quote medians; compare ratios within one run.
 """
 
 import argparse
 import json
 import platform
+import resource
 import sys
 import time
 from importlib.metadata import version
@@ -16,12 +18,19 @@ import numpy as np
 
 from stipple.halftone import default_threads, run
 from stipple.inputs import load_density
-from stipple.sphere import CellMap, sphere_problem
+from stipple.sphere import CellMap, from_lon_lat, sphere_problem
 from stipple.torus import torus_problem
 from stipple.transforms import alm_size, spherical_angles
 
 TORUS_CASES = [(30150, 650), (200000, 1300)]
 SPHERE_CASES = [(200000, 1000)]
+PEAKED_CASES = [(10000, None)]  # M, N (None: the default chosen from the density)
+
+
+def gaussian_bump(points, centre=(30.0, 20.0), sigma_degrees=8.0, floor=0.04):
+    """A sharp Gaussian bump on a faint background: the peaked density that made 0.1 form chains."""
+    angle = np.arccos(np.clip(points @ from_lon_lat(*np.array([[centre[0]], [centre[1]]]))[0], -1, 1))
+    return floor + (1 - floor) * np.exp(-(angle**2) / (2 * np.radians(sigma_degrees) ** 2))
 
 
 def median_iteration_seconds(problem, iterations):
@@ -95,6 +104,7 @@ def case(problem, raw_seconds, name, backend, threads, iterations):
     points = problem.sample(np.random.default_rng(0), problem.n_points)
     seconds, counts = median_iteration_seconds(problem, iterations)
     raw = raw_seconds(problem, points, max(5, iterations // 2))
+    near = problem.objective.terms[-1] if problem.settings.get("near_field") else None
     return {
         "domain": problem.domain,
         "input": name,
@@ -110,6 +120,9 @@ def case(problem, raw_seconds, name, backend, threads, iterations):
         "raw_transform_seconds_per_iteration": raw,
         "ratio_iteration_to_raw": seconds / raw,
         "transforms_per_iteration": counts,
+        "near_field": near is not None,
+        "near_field_pairs": near.pair_count if near is not None else 0,
+        "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
 
 
@@ -128,19 +141,24 @@ def main(argv=None):
     portrait = load_density("samples/astronaut256.png")
     topography = CellMap(load_density("samples/topo.npy"))
     results = []
+    def record(entry):
+        results.append(entry)
+        print(json.dumps(entry), file=sys.stderr)
+
     for n_points, bandwidth in [(2000, 128)] if args.quick else TORUS_CASES:
-        for backend in ("ducc0", "finufft"):
-            problem = torus_problem(portrait, n_points, bandwidth, backend=backend, threads=args.threads)
-            results.append(
-                case(problem, raw_torus_seconds, "samples/astronaut256.png", backend, args.threads, args.iterations)
+        for backend, near_field in (("ducc0", True), ("ducc0", False), ("finufft", True)):
+            problem = torus_problem(
+                portrait, n_points, bandwidth, backend=backend, threads=args.threads, near_field=near_field
             )
-            print(json.dumps(results[-1]), file=sys.stderr)
+            record(case(problem, raw_torus_seconds, "samples/astronaut256.png", backend, args.threads, args.iterations))
     for n_points, bandwidth in [(2000, 64)] if args.quick else SPHERE_CASES:
-        problem = sphere_problem(topography, n_points, bandwidth, threads=args.threads)
-        results.append(
-            case(problem, raw_sphere_seconds, "samples/topo.npy", "ducc0.sht", args.threads, args.iterations)
-        )
-        print(json.dumps(results[-1]), file=sys.stderr)
+        for near_field in (True, False):
+            problem = sphere_problem(topography, n_points, bandwidth, threads=args.threads, near_field=near_field)
+            record(case(problem, raw_sphere_seconds, "samples/topo.npy", "ducc0.sht", args.threads, args.iterations))
+    for n_points, bandwidth in [(2000, None)] if args.quick else PEAKED_CASES:
+        for near_field in (True, False):
+            problem = sphere_problem(gaussian_bump, n_points, bandwidth, threads=args.threads, near_field=near_field)
+            record(case(problem, raw_sphere_seconds, "gaussian bump", "ducc0.sht", args.threads, args.iterations))
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
     with open(args.output, "w") as stream:
         json.dump(report, stream, indent=2)

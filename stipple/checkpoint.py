@@ -9,6 +9,7 @@ and ``metadata``, a JSON string with ``format``, ``version``, ``settings`` (what
 import hashlib
 import io
 import json
+import math
 import time
 import zipfile
 from importlib.metadata import PackageNotFoundError, version
@@ -58,70 +59,165 @@ def save_checkpoint(path, state, problem):
     atomic_write(path, buffer.getvalue())
 
 
+MAX_METADATA_BYTES = 1 << 20
+MAX_ITERATION = 10**9
+NPY_HEADER_ALLOWANCE = 1 << 12
+
+
 def load_checkpoint(path, problem):
-    """The saved ``CGState`` for ``problem``; refuses files that are damaged, foreign, newer or for another problem."""
+    """The saved ``CGState`` for ``problem``; refuses files that are damaged, foreign, newer or for another problem.
+
+    Members are read one by one, each only after its stored size has been checked against what the
+    problem needs, and every member's dtype, shape and range is validated.
+    """
     try:
-        with np.load(path, allow_pickle=False) as archive:
-            contents = {name: archive[name] for name in archive.files}
+        with zipfile.ZipFile(path) as archive:
+            return _read_checkpoint(path, archive, problem)
     except FileNotFoundError:
         raise StippleError(f"{path}: no checkpoint to resume") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+    except zipfile.BadZipFile:
+        if _starts_like_zip(path):
+            raise StippleError(f"{path}: corrupt or truncated checkpoint (a damaged .npz archive)") from None
+        raise StippleError(f"{path}: not a stipple checkpoint (not a .npz archive)") from None
+    except (OSError, EOFError, zipfile.LargeZipFile, NotImplementedError, RuntimeError) as error:
         raise StippleError(f"{path}: corrupt or truncated checkpoint ({error})") from None
-    metadata = _metadata(path, contents)
-    _check_matches(path, metadata, problem)
-    state = _state(path, contents, metadata)
-    if state.points.shape != (problem.n_points, problem.manifold.dimension):
-        raise StippleError(f"{path}: corrupt checkpoint (points have shape {state.points.shape})")
-    return state
 
 
-def _metadata(path, contents):
-    if "metadata" not in contents:
-        raise StippleError(f"{path}: not a stipple checkpoint")
+def _starts_like_zip(path):
     try:
-        metadata = json.loads(str(contents["metadata"]))
-    except (TypeError, ValueError):
+        with open(path, "rb") as stream:
+            return stream.read(2) == b"PK"
+    except OSError:
+        return False
+
+
+def _read_checkpoint(path, archive, problem):
+    reader = _MemberReader(path, archive)
+    metadata = _metadata(path, reader.text("metadata", MAX_METADATA_BYTES))
+    _check_matches(path, metadata, problem)
+    iteration = reader.scalar("iteration", "iu")
+    if not 0 <= iteration <= MAX_ITERATION:
+        raise StippleError(f"{path}: corrupt checkpoint (iteration {iteration} is outside [0, {MAX_ITERATION}])")
+    shape = (problem.n_points, problem.manifold.dimension)
+    points = reader.array("points", shape)
+    _check_points(path, points, problem.domain)
+    history = {name: reader.array(name, (iteration + 1,)) for name in ("energies", "gradient_norms")}
+    curvatures = {name: reader.scalar(name, "f") for name in ("gradient_curvature", "direction_curvature")}
+    initial_norm = reader.scalar("initial_gradient_norm", "f")
+    if initial_norm < 0 or np.any(history["energies"] < 0) or np.any(history["gradient_norms"] < 0):
+        raise StippleError(f"{path}: corrupt checkpoint (negative energies or gradient norms)")
+    rng_state = metadata.get("rng_state", "")
+    if not isinstance(rng_state, str):
+        raise StippleError(f"{path}: corrupt checkpoint metadata (rng_state is not a string)")
+    return CGState(
+        points=points,
+        gradient=reader.array("gradient", shape),
+        direction=reader.array("direction", shape),
+        iteration=iteration,
+        initial_gradient_norm=initial_norm,
+        energies=history["energies"].tolist(),
+        gradient_norms=history["gradient_norms"].tolist(),
+        rng_state=rng_state,
+        **curvatures,
+    )
+
+
+class _MemberReader:
+    """Reads ``NAME.npy`` members of a checkpoint archive with a size cap, as plain arrays (no pickles)."""
+
+    def __init__(self, path, archive):
+        self.path = path
+        self.archive = archive
+
+    def raw(self, name, limit):
+        """The member's bytes; refused without decompressing if it is stored as larger than ``limit``."""
+        try:
+            info = self.archive.getinfo(f"{name}.npy")
+        except KeyError:
+            raise StippleError(f"{self.path}: not a stipple checkpoint, or corrupt (no member {name})") from None
+        limit += NPY_HEADER_ALLOWANCE
+        if info.file_size > limit:
+            raise StippleError(
+                f"{self.path}: corrupt checkpoint (member {name} holds {info.file_size} bytes, "
+                f"at most {limit} expected)"
+            )
+        with self.archive.open(info) as stream:
+            return stream.read(limit + 1)
+
+    def value(self, name, limit, shape, kinds):
+        from .inputs import load_array
+
+        data = self.raw(name, limit)
+        try:
+            array = load_array(data, name, kinds=kinds)
+        except StippleError as error:
+            raise StippleError(f"{self.path}: corrupt checkpoint ({error})") from None
+        if array.shape != shape:
+            raise StippleError(f"{self.path}: corrupt checkpoint ({name} has shape {array.shape}, not {shape})")
+        return array
+
+    def array(self, name, shape):
+        """A finite float64 array of exactly ``shape``."""
+        array = self.value(name, 8 * math.prod(shape), shape, "f").astype(np.float64)
+        if not np.all(np.isfinite(array)):
+            raise StippleError(f"{self.path}: corrupt checkpoint (NaN or infinite values in {name})")
+        return array
+
+    def scalar(self, name, kinds):
+        """A finite 0-d number of one of the dtype ``kinds`` ("f": float, "iu": integer) as float or int."""
+        value = self.value(name, 16, (), kinds)[()]
+        if not np.isfinite(value):
+            raise StippleError(f"{self.path}: corrupt checkpoint ({name} is {value})")
+        return int(value) if kinds == "iu" else float(value)
+
+    def text(self, name, limit):
+        """A 0-d unicode string member."""
+        return str(self.value(name, limit, (), "U")[()])
+
+
+def _check_points(path, points, domain):
+    if domain == "sphere":
+        in_range = np.all(np.abs(np.linalg.norm(points, axis=1) - 1) <= 1e-9)
+    else:
+        in_range = np.all((points >= 0) & (points <= 1))
+    if not in_range:
+        where = "unit vectors" if domain == "sphere" else "in [0, 1]"
+        raise StippleError(f"{path}: corrupt checkpoint (points are not {where})")
+
+
+def _metadata(path, text):
+    try:
+        metadata = json.loads(text)
+    except (TypeError, ValueError, RecursionError):
         raise StippleError(f"{path}: corrupt checkpoint metadata") from None
     if not isinstance(metadata, dict) or metadata.get("format") != FORMAT:
         raise StippleError(f"{path}: not a stipple checkpoint")
     saved_version = metadata.get("version")
-    if not isinstance(saved_version, int) or saved_version > VERSION:
+    if not isinstance(saved_version, int) or isinstance(saved_version, bool) or saved_version < 1:
+        raise StippleError(f"{path}: corrupt checkpoint metadata (format version {saved_version!r})")
+    if saved_version > VERSION:
         raise StippleError(
             f"{path}: checkpoint format version {saved_version} is newer than this stipple reads ({VERSION})"
         )
+    if not isinstance(metadata.get("settings"), dict) or not isinstance(metadata.get("fingerprint"), str):
+        raise StippleError(f"{path}: corrupt checkpoint metadata (settings or fingerprint)")
     return metadata
 
 
 def _check_matches(path, metadata, problem):
-    saved = metadata.get("settings", {})
+    saved = metadata["settings"]
     for key, value in problem.settings.items():
         if saved.get(key) != value:
             raise StippleError(
-                f"{path}: checkpoint is for a different problem: {key} was {saved.get(key)!r}, now {value!r}"
+                f"{path}: checkpoint is for a different problem: {key} was {_short(saved.get(key))}, now {value!r}"
             )
-    if metadata.get("fingerprint") != fingerprint(problem):
+    if metadata["fingerprint"] != fingerprint(problem):
         raise StippleError(f"{path}: checkpoint is for a different problem: the input differs")
 
 
-def _state(path, contents, metadata):
-    missing = [name for name in ARRAYS + SCALARS if name not in contents]
-    if missing:
-        raise StippleError(f"{path}: corrupt checkpoint (missing {', '.join(missing)})")
-    values = {name: contents[name] for name in ARRAYS}
-    if not all(np.all(np.isfinite(array)) for array in values.values()):
-        raise StippleError(f"{path}: corrupt checkpoint (NaN or infinite values)")
-    return CGState(
-        points=values["points"],
-        gradient=values["gradient"],
-        direction=values["direction"],
-        gradient_curvature=float(contents["gradient_curvature"]),
-        direction_curvature=float(contents["direction_curvature"]),
-        iteration=int(contents["iteration"]),
-        initial_gradient_norm=float(contents["initial_gradient_norm"]),
-        energies=values["energies"].tolist(),
-        gradient_norms=values["gradient_norms"].tolist(),
-        rng_state=str(metadata.get("rng_state", "")),
-    )
+def _short(value, limit=60):
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class Checkpointer:

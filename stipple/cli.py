@@ -1,11 +1,12 @@
 """Command-line interface: parses options, builds the problem, runs it, writes outputs.
 
-Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage (click's own); 130 / 143 after
-SIGINT / SIGTERM (a checkpoint and the outputs reached so far are written first).
+Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 after SIGINT / SIGTERM
+(during the optimisation a first signal writes the checkpoint and the outputs reached so far; any other
+signal removes every temporary file and leaves every output whole or untouched). Every error is one line.
 """
 
+import contextlib
 import io
-import os
 import re
 import shlex
 import signal
@@ -18,8 +19,9 @@ import numpy as np
 from . import __version__
 from .config import load_config
 from .errors import StippleError
+from .halftone import MAX_POINTS, check_integer
 from .inputs import load_density
-from .outputs import PROJECTIONS, check_writable, output_format, parse_length
+from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
 from .transforms import BACKENDS
 
 
@@ -47,29 +49,106 @@ class Progress:
             self.bar.close()
 
 
-class Interruption:
-    """Turns SIGINT / SIGTERM into a request to stop after the current iteration (a second one exits at once)."""
+class Interrupted(BaseException):
+    """Raised by the signal handler outside the optimiser (and on a second signal): unwinds every cleanup."""
+
+    def __init__(self, number):
+        super().__init__(number)
+        self.number = number
+
+
+class SignalGuard:
+    """SIGINT / SIGTERM for the whole command.
+
+    While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
+    iteration, so that the checkpoint and the outputs reached so far are written; any other signal
+    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143);
+    signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short.
+    """
 
     def __init__(self):
         self.signal = None
+        self.deferring = False
+        self.unwinding = False
         self._previous = {}
 
     def __enter__(self):
+        self.signal, self.deferring, self.unwinding = None, False, False
         for number in (signal.SIGINT, signal.SIGTERM):
-            self._previous[number] = signal.signal(number, self._handle)
+            try:
+                self._previous[number] = signal.signal(number, self._handle)
+            except ValueError:  # not the main thread: leave signals alone
+                break
         return self
 
     def __exit__(self, *exc):
         for number, handler in self._previous.items():
             signal.signal(number, handler)
+        self._previous.clear()
 
     def _handle(self, number, frame):
-        if self.signal is not None:
-            os._exit(128 + number)
-        self.signal = number
+        if self.deferring and self.signal is None:
+            self.signal = number
+            return
+        if self.unwinding:  # already on the way out: let the cleanup finish
+            return
+        self.unwinding = True
+        raise Interrupted(number)
 
-    def __call__(self, state):
+    @contextlib.contextmanager
+    def deferred(self):
+        """Within the block a first signal is only recorded (see ``stop_requested``)."""
+        self.deferring = True
+        try:
+            yield self
+        finally:
+            self.deferring = False
+
+    def stop_requested(self, state):
         return self.signal is not None
+
+
+SIGNALS = SignalGuard()
+
+
+class StippleGroup(click.Group):
+    """The ``stipple`` group: every error is one line on stderr, and signals unwind cleanly.
+
+    Usage errors exit 2, data and file errors 1, SIGINT / SIGTERM 130 / 143.
+    """
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            with SIGNALS:
+                code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.UsageError as error:
+            hint = f" (see '{error.ctx.command_path} --help')" if error.ctx is not None else ""
+            _error_line(f"Error: {error.format_message()}{hint}")
+            sys.exit(error.exit_code)
+        except click.ClickException as error:
+            _error_line(f"Error: {error.format_message()}")
+            sys.exit(error.exit_code)
+        except click.Abort:
+            _error_line("Aborted!")
+            sys.exit(1)
+        except MemoryError:
+            _error_line("Error: out of memory")
+            sys.exit(1)
+        except OSError as error:
+            _error_line(f"Error: {error.strerror or error}" + (f": {error.filename}" if error.filename else ""))
+            sys.exit(1)
+        except Interrupted as interruption:
+            name = signal.Signals(interruption.number).name
+            _error_line(f"stipple: stopped by {name}; outputs are whole or untouched, no temporary file left")
+            sys.exit(128 + interruption.number)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+def _error_line(text):
+    """``text`` on stderr as one line (newlines in messages folded)."""
+    click.echo(" ".join(text.split("\n")), err=True)
 
 
 def parse_every(text):
@@ -187,34 +266,58 @@ def load_input(source, **options):
 
 def render_settings(width, dot_radius, png_width):
     return {
-        "width": parse_length(width),
-        "dot_radius": None if dot_radius is None else parse_length(dot_radius),
+        "width": parse_length(width, "width"),
+        "dot_radius": None if dot_radius is None else parse_length(dot_radius, "dot-radius"),
         "png_width": png_width,
     }
 
 
-def prepare_outputs(paths, checkpoint):
-    """Check every output's format and directory before any work is done."""
-    for path in paths:
+def check_longitude(name, value):
+    """A finite longitude in [-360, 360] degrees."""
+    if not -360 <= value <= 360:
+        raise StippleError(f"{name} must be a longitude in [-360, 360] degrees, not {value!r}")
+    return float(value)
+
+
+@contextlib.contextmanager
+def guarded_files(inputs, outputs, checkpoint=None, reports=()):
+    """Check every file of a run before any work, then hold the checkpoint's lock for the whole run.
+
+    ``inputs`` and ``reports`` are ``(role, path)`` pairs (files read; extra files written). Outputs'
+    formats and directories are checked, no output may name an input, the checkpoint or another
+    output, and ``-`` (stdout) may be given once.
+    """
+    from .safety import CheckpointLock, check_distinct
+
+    for path in outputs:
         output_format(path)
         check_writable(path)
-    if list(paths).count("-") > 1:
+    for _, path in reports:
+        check_writable(path)
+    if list(outputs).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
-    if checkpoint is not None:
-        check_writable(checkpoint)
+    config = click.get_current_context().meta.get("stipple.config")
+    inputs = [*inputs, ("config", config)]
+    written = [("output", path) for path in outputs] + list(reports) + [("checkpoint", checkpoint)]
+    check_distinct(inputs, written)
+    if checkpoint is None:
+        yield
+        return
+    check_writable(checkpoint)
+    with CheckpointLock(checkpoint):
+        yield
+
+
+def init_input(init):
+    """The ``--init`` value as an input file role, or None for ``density`` / ``uniform``."""
+    return None if init in ("density", "uniform") else ("--init file", init)
 
 
 def write_outputs(paths, render):
-    """Render every output first, then write them (atomically; ``-`` is stdout)."""
-    from .outputs import atomic_write
+    """Render every output in memory, then write them all-or-nothing (``-`` is stdout)."""
+    from .outputs import commit_outputs
 
-    rendered = [(path, render(output_format(path))) for path in paths]
-    for path, data in rendered:
-        if path == "-":
-            sys.stdout.buffer.write(data)
-            sys.stdout.buffer.flush()
-        else:
-            atomic_write(path, data)
+    commit_outputs([(path, render(output_format(path))) for path in paths])
 
 
 def solve(problem, options, init):
@@ -232,8 +335,9 @@ def solve(problem, options, init):
             f"tol={options['tol']:g}, iterations<={options['iterations']}",
             err=True,
         )
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
     progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
-    with Interruption() as interruption:
+    with SIGNALS.deferred() as interruption:
         try:
             result = run(
                 problem,
@@ -243,7 +347,7 @@ def solve(problem, options, init):
                 iterations=options["iterations"],
                 time_limit=options["time_limit"],
                 safeguard=options["safeguard"],
-                callback=lambda state: progress(state) or interruption(state),
+                callback=lambda state: progress(state) or interruption.stop_requested(state),
                 checkpoint=options["checkpoint"],
                 checkpoint_seconds=seconds,
                 checkpoint_iterations=iterations,
@@ -276,7 +380,7 @@ def finish(result, stopped_by, options, started):
         click.echo(f"stipple: {result.message}; E={result.energy:.6e}; {time.perf_counter() - started:.1f} s", err=True)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=StippleGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="stipple")
 def main():
     """Halftoning by discrepancy minimisation on the torus (images) and the sphere (global maps)."""
@@ -311,30 +415,38 @@ def torus(ctx, image, **options):
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
-        prepare_outputs(options["outputs"], options["checkpoint"])
-        weights = load_input(
-            image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
-        )
-        problem = torus_problem(
-            weights,
-            options["n_points"],
-            options["bandwidth"],
-            backend=options["backend"],
-            threads=options["threads"],
-            epsilon=options["epsilon"] or DEFAULT_EPSILON,
-            hessian=options["hessian"],
-            near_field=options["near_field"] is not False,
-        )
-        result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
-        points = plot_order(
-            physical_centres(result.points, weights.shape, settings["width"]),
-            result.points,
-            options,
-            settings["width"][1],
-        )
-        write_outputs(
-            options["outputs"], lambda fmt: torus_output(points, weights.shape, fmt, ink=weights.mean(), **settings)
-        )
+        inputs = [("image", image), init_input(options["init"])]
+        with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
+            weights = load_input(
+                image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+            )
+            check_png_outputs(
+                [output_format(path) for path in options["outputs"]],
+                weights.shape[::-1],
+                options["png_width"],
+                options["n_points"],
+            )
+            problem = torus_problem(
+                weights,
+                options["n_points"],
+                options["bandwidth"],
+                backend=options["backend"],
+                threads=options["threads"],
+                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+                hessian=options["hessian"],
+                near_field=options["near_field"] is not False,
+            )
+            result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
+            points = plot_order(
+                physical_centres(result.points, weights.shape, settings["width"]),
+                result.points,
+                options,
+                settings["width"][1],
+            )
+            write_outputs(
+                options["outputs"],
+                lambda fmt: torus_output(points, weights.shape, fmt, ink=weights.mean(), **settings),
+            )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
@@ -359,19 +471,20 @@ def line(ctx, image, **options):
     try:
         width = parse_length(options["width"])
         pen_width = None if options["pen_width"] is None else parse_length(options["pen_width"])
-        prepare_outputs(options["outputs"], options["checkpoint"])
-        weights = load_input(
-            image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
-        )
-        init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
-        result, stopped_by = solve_line(weights, options, init)
-        points = line_points(result.points)
-        write_outputs(
-            options["outputs"],
-            lambda fmt: line_output(
-                points, weights.shape, fmt, width=width, pen_width=pen_width, png_width=options["png_width"]
-            ),
-        )
+        inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
+        with guarded_files(inputs, options["outputs"], options["checkpoint"]):
+            weights = load_input(
+                image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+            )
+            init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
+            result, stopped_by = solve_line(weights, options, init)
+            points = line_points(result.points)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: line_output(
+                    points, weights.shape, fmt, width=width, pen_width=pen_width, png_width=options["png_width"]
+                ),
+            )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
@@ -382,8 +495,9 @@ def solve_line(weights, options, init):
     from .line import draw_line
 
     seconds, iterations = parse_every(options["checkpoint_every"])
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
     progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
-    with Interruption() as interruption:
+    with SIGNALS.deferred() as interruption:
         try:
             result = draw_line(
                 weights,
@@ -395,7 +509,7 @@ def solve_line(weights, options, init):
                 tol=options["tol"],
                 iterations=options["iterations"],
                 time_limit=options["time_limit"],
-                callback=lambda state: progress(state) or interruption(state),
+                callback=lambda state: progress(state) or interruption.stop_requested(state),
                 checkpoint=options["checkpoint"],
                 checkpoint_seconds=seconds,
                 checkpoint_iterations=iterations,
@@ -419,9 +533,9 @@ def read_torus_init(init, shape):
     """``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
     if init in ("density", "uniform"):
         return init
-    from .inputs import read_points_csv
-
-    pixels = read_points_csv(init, ("x", "y"))
+    domain, pixels = read_points(init)
+    if domain != "torus":
+        raise StippleError(f"{init}: --init for the torus needs a CSV with columns x,y (pixels)")
     rows, columns = shape
     return np.mod(pixels / np.array([columns, rows]), 1.0)
 
@@ -467,33 +581,37 @@ def sphere(ctx, map_source, **options):
     try:
         settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
         view = parse_view(options["view"])
-        prepare_outputs(options["outputs"], options["checkpoint"])
-        density = load_sphere_density(map_source, options)
-        problem = sphere_problem(
-            density,
-            options["n_points"],
-            options["bandwidth"],
-            kernel=options["kernel"],
-            threads=options["threads"],
-            epsilon=options["epsilon"] or DEFAULT_EPSILON,
-            near_field=options["near_field"],
-        )
-        result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
-        points = plot_order(result.points, result.points, options, "radians")
-        degrees = lon_lat(points)
-        write_outputs(
-            options["outputs"],
-            lambda fmt: sphere_output(
-                points,
-                degrees,
-                fmt,
-                coords=options["coords"],
-                projection=options["projection"],
-                view=view,
-                ink=density.mean,
-                **settings,
-            ),
-        )
+        lon0 = check_longitude("lon0", options["lon0"])
+        formats = [output_format(path) for path in options["outputs"]]
+        check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
+        inputs = [("map", map_source), init_input(options["init"])]
+        with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
+            density = load_sphere_density(map_source, {**options, "lon0": lon0})
+            problem = sphere_problem(
+                density,
+                options["n_points"],
+                options["bandwidth"],
+                kernel=options["kernel"],
+                threads=options["threads"],
+                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+                near_field=options["near_field"],
+            )
+            result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
+            points = plot_order(result.points, result.points, options, "radians")
+            degrees = lon_lat(points)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: sphere_output(
+                    points,
+                    degrees,
+                    fmt,
+                    coords=options["coords"],
+                    projection=options["projection"],
+                    view=view,
+                    ink=density.mean,
+                    **settings,
+                ),
+            )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
@@ -550,50 +668,63 @@ def read_sphere_init(init):
     """``density``/``uniform``, or a CSV of ``lon,lat`` degrees or ``x,y,z`` as unit vectors."""
     if init in ("density", "uniform"):
         return init
-    from .inputs import read_points_csv
-    from .sphere import from_lon_lat
+    domain, points = read_points(init)
+    if domain != "sphere":
+        raise StippleError(f"{init}: --init for the sphere needs a CSV with columns lon,lat or x,y,z")
+    return points
 
-    try:
-        longitude, latitude = read_points_csv(init, ("lon", "lat")).T
-        return from_lon_lat(longitude, latitude)
-    except StippleError as error:
-        if "expected CSV columns" not in str(error):
-            raise
-    return read_points_csv(init, ("x", "y", "z"))
+
+MAX_PIXEL_COORDINATE = 2**31
 
 
 def read_points(source):
-    """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``."""
+    """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``.
+
+    The header decides: ``x,y,z`` and ``lon,lat`` are sphere points (latitudes in [-90, 90], no zero
+    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size).
+    """
     from .inputs import read_points_csv, read_source
     from .sphere import from_lon_lat
 
+    name = "<stdin>" if source == "-" else source
     data = read_source(sys.stdin.buffer if source == "-" else source)
-    header = data.split(b"\n", 1)[0].decode("utf-8", errors="replace").replace(" ", "").lower()
+    first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
+    columns = {column.strip().lower() for column in first_line.split(",")}
 
     def table(names):
         stream = io.BytesIO(data)
-        stream.name = "<stdin>" if source == "-" else source
-        return read_points_csv(stream, names)
+        stream.name = name
+        points = read_points_csv(stream, names)
+        if len(points) > MAX_POINTS:
+            raise StippleError(f"{name}: {len(points)} points; at most {MAX_POINTS} are read")
+        return points
 
-    if header.startswith("x,y,z"):
-        points = table(("x", "y", "z"))
-        return "sphere", points / np.linalg.norm(points, axis=1, keepdims=True)
-    if header.startswith("x,y"):
-        return "torus", table(("x", "y"))
-    if header.startswith("lon,lat"):
+    if {"x", "y", "z"} <= columns:
+        return "sphere", unit_rows(table(("x", "y", "z")), name)
+    if {"lon", "lat"} <= columns:
         longitude, latitude = table(("lon", "lat")).T
+        if np.any(np.abs(latitude) > 90):
+            raise StippleError(f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(latitude).max():g}")
         return "sphere", from_lon_lat(longitude, latitude)
-    raise StippleError(f"{source}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+    if {"x", "y"} <= columns:
+        pixels = table(("x", "y"))
+        if np.abs(pixels).max() >= MAX_PIXEL_COORDINATE:
+            raise StippleError(
+                f"{name}: x,y must be pixel positions below {MAX_PIXEL_COORDINATE} in size, "
+                f"not {np.abs(pixels).max():g}"
+            )
+        return "torus", pixels
+    raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
 
 
-def parse_size(text):
-    try:
-        width, height = (int(part) for part in text.lower().replace("x", ",").split(","))
-    except ValueError:
-        raise StippleError(f"size must be WIDTH,HEIGHT in pixels, not {text!r}") from None
-    if width < 1 or height < 1:
-        raise StippleError(f"size must be positive, not {text!r}")
-    return height, width
+def unit_rows(vectors, name):
+    """Rows scaled to unit length (safely for tiny and huge entries); zero rows are refused."""
+    largest = np.abs(vectors).max(axis=1, keepdims=True)
+    if np.any(largest == 0):
+        row = int(np.argmax(largest[:, 0] == 0)) + 1
+        raise StippleError(f"{name}: point {row} is the zero vector (0,0,0); x,y,z must be directions")
+    scaled = vectors / largest
+    return scaled / np.linalg.norm(scaled, axis=1, keepdims=True)
 
 
 @main.command()
@@ -629,31 +760,54 @@ def render(points_source, outputs, like, size, width, dot_radius, png_width, ord
     options = {"order": order, "quiet": quiet}
     try:
         settings = render_settings(width, dot_radius, png_width)
-        prepare_outputs(outputs, None)
-        domain, points = read_points(points_source)
-        if domain == "sphere":
-            points = plot_order(points, points, options, "radians")
-            angles, degrees = parse_view(view), lon_lat(points)
-            write_outputs(
-                outputs,
-                lambda fmt: sphere_output(
-                    points, degrees, fmt, coords=coords, projection=projection, view=angles, **settings
-                ),
-            )
-            return
-        ink = None
-        if like is not None:
-            weights = load_input(like)
-            shape, ink = weights.shape, weights.mean()
-        elif size is not None:
-            shape = parse_size(size)
-        else:
-            shape = (int(np.ceil(points[:, 1].max(initial=1))), int(np.ceil(points[:, 0].max(initial=1))))
-        unit = points / np.array([shape[1], shape[0]])
-        unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
-        write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, ink=ink, **settings))
+        angles = parse_view(view)
+        formats = [output_format(path) for path in outputs]
+        with guarded_files([("points", points_source), ("--like image", like)], outputs):
+            domain, points = read_points(points_source)
+            if domain == "sphere":
+                check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
+                points = plot_order(points, points, options, "radians")
+                degrees = lon_lat(points)
+                write_outputs(
+                    outputs,
+                    lambda fmt: sphere_output(
+                        points, degrees, fmt, coords=coords, projection=projection, view=angles, **settings
+                    ),
+                )
+                return
+            shape, ink, points = torus_canvas(points, like, size)
+            check_png_outputs(formats, shape[::-1], png_width, len(points))
+            unit = points / np.array([shape[1], shape[0]])
+            unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
+            write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, ink=ink, **settings))
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+
+
+def parse_size(text):
+    """``"W,H"`` or ``"WxH"`` pixels -> ``(H, W)``; each side from 1 to ``MAX_PIXEL_COORDINATE``."""
+    try:
+        width, height = (int(part) for part in text.lower().replace("x", ",").split(","))
+    except ValueError:
+        raise StippleError(f"size must be WIDTH,HEIGHT in pixels, not {text!r}") from None
+    if not (1 <= width < MAX_PIXEL_COORDINATE and 1 <= height < MAX_PIXEL_COORDINATE):
+        raise StippleError(f"size must be WIDTH,HEIGHT with each in [1, {MAX_PIXEL_COORDINATE - 1}], not {text!r}")
+    return height, width
+
+
+def torus_canvas(pixels, like, size):
+    """``(shape, ink, pixels)`` of torus points: the canvas of ``--like`` or ``--size`` with the points wrapped
+    onto it, or by default the smallest canvas from the origin that holds every point."""
+    if like is None and size is None:
+        shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
+        return (max(shape[0], 1), max(shape[1], 1)), None, pixels
+    ink = None
+    if like is not None:
+        weights = load_input(like)
+        shape, ink = weights.shape, weights.mean()
+    else:
+        shape = parse_size(size)
+    return shape, ink, np.mod(pixels, np.array([shape[1], shape[0]]))
 
 
 @main.command()
@@ -686,65 +840,81 @@ def evaluate(
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform)."""
     import json
 
-    from .evaluate import evaluate_sphere, evaluate_torus
-    from .outputs import spectrum_plot
+    from .outputs import commit_outputs, spectrum_plot
 
-    options = {"uniform": uniform, "invert": invert, "gamma": gamma, "value_range": value_range, "lon0": lon0}
+    options = {"uniform": uniform, "invert": invert, "gamma": gamma, "value_range": value_range}
     try:
-        if json_path not in (None, "-"):
-            check_writable(json_path)
-        if spectrum_path is not None:
-            check_writable(spectrum_path)
-        domain, points = read_points(points_source)
-        if spectrum_path is not None and (domain != "torus" or as_line):
-            raise StippleError("--spectrum is for torus points only")
-        if as_line:
-            report = evaluate_line_points(points, domain, input_source, bandwidth, invert, gamma, value_range)
-        elif domain == "torus":
-            from .torus import torus_problem
-
-            if input_source is None:
-                raise StippleError("missing INPUT: the image or map the points were made from")
-            weights = load_input(input_source, invert=invert, gamma=gamma, value_range=value_range)
-            unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
-            problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10)
-            report = evaluate_torus(problem, unit, weights)
-        else:
-            from .sphere import sphere_problem
-
-            density = load_sphere_density(input_source, options)
-            problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
-            report = evaluate_sphere(problem, points, density)
-        if spectrum_path is not None:
-            spectrum = report["spectrum"]
-            emit_file(spectrum_path, spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"]))
-        if json_path is not None:
-            emit_file(json_path, (json.dumps(report, indent=2) + "\n").encode())
-        if json_path != "-":
-            click.echo(format_report(report))
+        options["lon0"] = check_longitude("lon0", lon0)
+        check_extension("--json", json_path, ".json")
+        check_extension("--spectrum", spectrum_path, ".png")
+        if json_path == "-" and spectrum_path == "-":
+            raise StippleError("'-' (stdout) may be given only once")
+        reports = [(role, path) for role, path in (("--json", json_path), ("--spectrum", spectrum_path)) if path]
+        reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
+        with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
+            domain, points = read_points(points_source)
+            if len(points) < 2:
+                raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
+            if spectrum_path is not None and (domain != "torus" or as_line):
+                raise StippleError("--spectrum is for torus points only")
+            if as_line:
+                report = evaluate_line_points(points, domain, input_source, bandwidth, options)
+            else:
+                report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
+            files = []
+            if spectrum_path is not None:
+                spectrum = report["spectrum"]
+                plot = spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"])
+                files.append((spectrum_path, plot))
+            if json_path is not None:
+                files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
+            if json_path != "-":
+                files.append(("-", (format_report(report) + "\n").encode()))
+            commit_outputs(files)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
 
 
-def evaluate_line_points(pixels, domain, input_source, bandwidth, invert, gamma, value_range):
+def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
     """The report of ``stipple evaluate --line``: E_N of the vertices, length, segments, the drawn line's PSNR."""
     from .evaluate import evaluate_line
     from .line import closed_length, line_problem
 
     if domain != "torus" or input_source is None:
         raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
-    weights = load_input(input_source, invert=invert, gamma=gamma, value_range=value_range)
+    weights = load_input(
+        input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+    )
     problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
     return evaluate_line(problem, pixels / np.array([weights.shape[1], weights.shape[0]]), weights)
 
 
-def emit_file(path, data):
-    from .outputs import atomic_write
+def check_extension(option, path, extension):
+    """Refuse a report file whose name does not end in ``extension`` (``-`` is stdout)."""
+    if path not in (None, "-") and not str(path).lower().endswith(extension):
+        raise StippleError(f"{path}: {option} writes {extension} files; the name must end in {extension}")
 
-    if path == "-":
-        sys.stdout.buffer.write(data)
-    else:
-        atomic_write(path, data)
+
+def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
+    """The evaluation report of torus pixels or sphere unit vectors against their input."""
+    from .evaluate import evaluate_sphere, evaluate_torus
+
+    if domain == "torus":
+        from .torus import torus_problem
+
+        if input_source is None:
+            raise StippleError("missing INPUT: the image or map the points were made from")
+        weights = load_input(
+            input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+        )
+        unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
+        problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10)
+        return evaluate_torus(problem, unit, weights)
+    from .sphere import sphere_problem
+
+    density = load_sphere_density(input_source, options)
+    problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
+    return evaluate_sphere(problem, points, density)
 
 
 def format_report(report):

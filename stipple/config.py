@@ -1,5 +1,6 @@
 """``--config FILE.toml`` for the CLI: a TOML table of option values that become the command's defaults."""
 
+import math
 import os
 import tomllib
 
@@ -7,6 +8,7 @@ import click
 
 CONFIG_ALIASES = {"points": "n_points", "output": "outputs", "range": "value_range", "input": None}
 PATH_KEYS = ("outputs", "init", "checkpoint")
+MAX_CONFIG_BYTES = 1 << 20
 
 
 def load_config(ctx, param, value):
@@ -18,13 +20,8 @@ def load_config(ctx, param, value):
     """
     if value is None:
         return None
-    try:
-        with open(value, "rb") as stream:
-            table = tomllib.load(stream)
-    except OSError as error:
-        raise click.BadParameter(f"cannot read {value}: {error.strerror}", ctx, param) from None
-    except tomllib.TOMLDecodeError as error:
-        raise click.BadParameter(f"{value} is not valid TOML: {error}", ctx, param) from None
+    table = _read_table(value, ctx, param)
+    ctx.meta["stipple.config"] = value
     base = os.path.dirname(os.path.abspath(value))
     parameters = {p.name: p for p in ctx.command.params if p.name != "config"}
     defaults = {}
@@ -39,15 +36,44 @@ def load_config(ctx, param, value):
             raise click.BadParameter(f"unknown key {key!r} in {value}", ctx, param)
         if isinstance(item, bool) != getattr(parameters[name], "is_flag", False):
             raise click.BadParameter(f"key {key!r} in {value}: wrong type {type(item).__name__}", ctx, param)
-        try:
-            converted = parameters[name].type_cast_value(ctx, item)
-        except click.BadParameter as error:
-            raise click.BadParameter(f"key {key!r} in {value}: {error.message}", ctx, param) from None
+        converted = _convert(parameters[name], item, f"key {key!r} in {value}", ctx, param)
         if name in PATH_KEYS:
             converted = _resolve_paths(base, converted)
         defaults[name] = converted
     ctx.default_map = {**(ctx.default_map or {}), **defaults}
     return value
+
+
+def _read_table(path, ctx, param):
+    """The TOML table of ``path`` (UTF-8, at most ``MAX_CONFIG_BYTES``)."""
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_CONFIG_BYTES + 1)
+    except OSError as error:
+        raise click.BadParameter(f"cannot read {path}: {error.strerror}", ctx, param) from None
+    if len(data) > MAX_CONFIG_BYTES:
+        raise click.BadParameter(f"{path} is longer than {MAX_CONFIG_BYTES} bytes; not a config file", ctx, param)
+    try:
+        return tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise click.BadParameter(f"{path} is not UTF-8 text", ctx, param) from None
+    except (tomllib.TOMLDecodeError, RecursionError) as error:
+        raise click.BadParameter(f"{path} is not valid TOML: {error}", ctx, param) from None
+
+
+def _convert(parameter, item, where, ctx, param):
+    """``item`` converted by the option's own type; floats for integer options and non-finite numbers refused."""
+    expects_integer = isinstance(parameter.type, click.types.IntParamType)
+    for number in item if isinstance(item, list) else [item]:
+        if isinstance(number, float) and (expects_integer or not math.isfinite(number)):
+            kind = "an integer" if expects_integer else "a finite number"
+            raise click.BadParameter(f"{where}: expected {kind}, not {number!r}", ctx, param)
+    try:
+        return parameter.type_cast_value(ctx, item)
+    except click.BadParameter as error:
+        raise click.BadParameter(f"{where}: {error.message}", ctx, param) from None
+    except (TypeError, ValueError, OverflowError) as error:
+        raise click.BadParameter(f"{where}: {error}", ctx, param) from None
 
 
 def _resolve_paths(base, value):

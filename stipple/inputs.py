@@ -1,6 +1,9 @@
 """Reading images and numeric maps into densities ``w >= 0`` (dark = many dots)."""
 
 import io
+import math
+import os
+import stat
 import warnings
 
 import numpy as np
@@ -9,24 +12,51 @@ from PIL import Image, ImageOps, UnidentifiedImageError
 from .errors import StippleError
 
 NPY_MAGIC = b"\x93NUMPY"
-_LUMA = np.array([0.299, 0.587, 0.114])
+MAX_INPUT_BYTES = 1 << 30
+MAX_NPY_HEADER = 10_000
+# Rec. 601 luma in thousandths: integer sums keep white exactly white (0.299 + 0.587 + 0.114 != 1 in floats).
+_LUMA = np.array([299, 587, 114])
+_FLOAT_SCALES = (1.0, 255.0, 65535.0)
 
 
-def read_source(source):
-    """Bytes of ``source``: a path, or a binary file object (``-`` in the CLI is stdin)."""
+def read_source(source, limit=None):
+    """Bytes of ``source`` (a path, or a binary file object such as stdin), at most ``limit`` of them
+    (default ``MAX_INPUT_BYTES``).
+
+    Raises
+    ------
+    StippleError
+        If the source cannot be read or holds more than ``limit`` bytes (``/dev/zero`` never ends).
+    """
+    name = str(getattr(source, "name", source))
+    limit = MAX_INPUT_BYTES if limit is None else limit
     try:
         if hasattr(source, "read"):
-            return source.read()
+            return _read_bounded(source, limit, name)
         with open(source, "rb") as handle:
-            return handle.read()
+            return _read_bounded(handle, limit, name)
     except OSError as error:
-        raise StippleError(f"cannot read {source}: {error.strerror or error}") from None
+        raise StippleError(f"cannot read {name}: {error.strerror or error}") from None
+
+
+def _read_bounded(stream, limit, name):
+    try:
+        status = os.fstat(stream.fileno())
+    except (OSError, ValueError, AttributeError):
+        status = None
+    if status is not None and stat.S_ISREG(status.st_mode) and status.st_size > limit:
+        raise StippleError(f"{name}: file is {status.st_size} bytes, more than the {limit} bytes read at most")
+    data = stream.read(limit + 1)
+    if len(data) > limit:
+        raise StippleError(f"{name}: input is longer than the {limit} bytes read at most")
+    return data
 
 
 def load_gray(data, name="input"):
     """Gray values ``u`` in [0, 1] (0 = black) of an image file's bytes; alpha is composited on white.
 
-    PNG, JPEG, TIFF and anything else Pillow opens; 8- and 16-bit gray, RGB(A), palettes. EXIF
+    PNG, JPEG, TIFF and anything else Pillow opens; 8- and 16-bit gray, RGB(A), palettes, 32-bit float
+    (values in [0, 1], or 0..255 / 0..65535, which are rescaled like 8- and 16-bit images). EXIF
     orientation is applied. Pillow's decompression-bomb guard stays on.
     """
     try:
@@ -38,40 +68,94 @@ def load_gray(data, name="input"):
         raise StippleError(f"{name}: image is too large (Pillow's decompression-bomb guard)") from None
     except UnidentifiedImageError:
         raise StippleError(f"{name}: cannot decode image (not a supported image or .npy file, or truncated)") from None
-    except (OSError, SyntaxError, ValueError) as error:
-        raise StippleError(f"{name}: cannot decode image ({error})") from None
+    except (OSError, SyntaxError, ValueError, MemoryError) as error:
+        raise StippleError(f"{name}: cannot decode image ({error or type(error).__name__})") from None
     image = ImageOps.exif_transpose(image)
-    return _gray_values(image)
+    return _gray_values(image, name)
 
 
-def _gray_values(image):
+def _gray_values(image, name):
     if image.mode in ("I;16", "I;16B", "I;16L", "I;16N"):
         return np.asarray(image, dtype=np.float64) / 65535.0
     if image.mode == "I":
         values = np.asarray(image, dtype=np.float64)
+        if values.min(initial=0) < 0 or values.max(initial=0) > 65535:
+            raise StippleError(
+                f"{name}: 32-bit integer image values must lie in [0, 255] or [0, 65535], "
+                f"not [{values.min():g}, {values.max():g}]"
+            )
         return values / (65535.0 if values.max(initial=0) > 255 else 255.0)
     if image.mode == "F":
-        return np.clip(np.asarray(image, dtype=np.float64), 0.0, 1.0)
+        return _float_gray(np.asarray(image, dtype=np.float64), name)
     if image.mode in ("L", "1"):
         return np.asarray(image.convert("L"), dtype=np.float64) / 255.0
-    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+    rgba = np.asarray(image.convert("RGBA"), dtype=np.int64)
     alpha = rgba[..., 3]
-    return (rgba[..., :3] @ _LUMA) * alpha + (1.0 - alpha)
+    luma = rgba[..., :3] @ _LUMA  # 0 .. 255000, exact
+    # (luma * alpha + 255000 * (255 - alpha)) / (255000 * 255) in exact integers: white stays 1.0.
+    return (luma * alpha + 255000 * (255 - alpha)) / (255000.0 * 255.0)
 
 
-def load_array(data, name="input"):
-    """A numeric 2-D array from ``.npy`` bytes; object arrays are refused (nothing is unpickled)."""
+def _float_gray(values, name):
+    """A float image's values in [0, 1]; images stored as 0..255 or 0..65535 are rescaled like integer ones."""
+    if not np.all(np.isfinite(values)):
+        raise StippleError(f"{name}: image contains NaN or infinite values")
+    low, high = values.min(initial=0.0), values.max(initial=0.0)
+    scale = next((scale for scale in _FLOAT_SCALES if high <= scale), None)
+    if low < 0 or scale is None:
+        raise StippleError(
+            f"{name}: float image values must lie in [0, 1], [0, 255] or [0, 65535], not [{low:g}, {high:g}]"
+        )
+    return values / scale
+
+
+KIND_NAMES = {"biuf": "real numbers", "f": "floating-point numbers", "iu": "an integer", "U": "a text string"}
+
+
+def load_array(data, name="input", kinds="biuf"):
+    """An array from ``.npy`` bytes, checked before anything is allocated; nothing is unpickled.
+
+    ``kinds`` are the accepted dtype kinds (default: real numbers, returned as float64). The header is
+    parsed first (at most ``MAX_NPY_HEADER`` bytes); Python objects, other dtypes and headers that
+    declare more data than the file holds are refused.
+    """
+    shape, fortran, dtype, offset = _npy_header(data, name)
+    if dtype.hasobject:
+        raise StippleError(f"{name}: .npy holds Python objects; only numeric arrays are read")
+    if dtype.kind not in kinds or dtype.fields is not None or dtype.subdtype is not None:
+        raise StippleError(f"{name}: .npy must hold {KIND_NAMES[kinds]}, not {dtype}")
+    count = math.prod(shape)
+    if count * dtype.itemsize > len(data) - offset:
+        raise StippleError(
+            f"{name}: truncated .npy file: its header declares shape {shape} ({count * dtype.itemsize} bytes) "
+            f"but only {len(data) - offset} bytes follow"
+        )
+    array = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+    array = array.reshape(shape, order="F" if fortran else "C")
+    return array.astype(np.float64) if kinds == "biuf" else array.copy()
+
+
+def _npy_header(data, name):
+    """``(shape, fortran_order, dtype, data_offset)`` of ``.npy`` bytes."""
+    stream = io.BytesIO(data)
     try:
-        array = np.load(io.BytesIO(data), allow_pickle=False)
-    except ValueError as error:
-        if "pickle" in str(error).lower():
-            raise StippleError(f"{name}: .npy holds Python objects; only numeric arrays are read") from None
+        major, _ = np.lib.format.read_magic(stream)
+        length_bytes = 2 if major == 1 else 4
+        length = int.from_bytes(stream.read(length_bytes), "little")
+        if major not in (1, 2, 3):
+            raise ValueError(f"unknown format version {major}")
+        if length > MAX_NPY_HEADER:
+            raise StippleError(f"{name}: .npy header is {length} bytes long; at most {MAX_NPY_HEADER} are read")
+        stream.seek(-length_bytes, io.SEEK_CUR)
+        reader = np.lib.format.read_array_header_1_0 if major == 1 else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = reader(stream, max_header_size=MAX_NPY_HEADER)
+    except (ValueError, TypeError, SyntaxError, OverflowError, EOFError, UnicodeError) as error:
+        if isinstance(error, StippleError):
+            raise
         raise StippleError(f"{name}: corrupt or truncated .npy file ({error})") from None
-    except (OSError, EOFError) as error:
-        raise StippleError(f"{name}: corrupt or truncated .npy file ({error})") from None
-    if not np.issubdtype(array.dtype, np.number) or np.issubdtype(array.dtype, np.complexfloating):
-        raise StippleError(f"{name}: .npy must hold real numbers, not {array.dtype}")
-    return array.astype(np.float64)
+    if any(size < 0 for size in shape):
+        raise StippleError(f"{name}: corrupt .npy file (negative size in shape {shape})")
+    return tuple(int(size) for size in shape), bool(fortran), dtype, stream.tell()
 
 
 def check_grid(values, name="input"):
@@ -85,11 +169,22 @@ def check_grid(values, name="input"):
     return values
 
 
+def check_range(value_range):
+    """``(LO, HI)`` as floats if both are finite and ``LO < HI``."""
+    low, high = (float(value) for value in value_range)
+    if not (np.isfinite(low) and np.isfinite(high) and low < high):
+        raise StippleError(f"range must be two finite numbers LO HI with LO < HI, not {low:g} {high:g}")
+    return low, high
+
+
 def rescale(values, value_range=None, name="input"):
     """Linear map of ``value_range`` (default: the data's min and max) onto [0, 1], clipped."""
-    low, high = value_range if value_range is not None else (values.min(), values.max())
-    if not high > low:
-        raise StippleError(f"{name}: map is constant ({low:g}); nothing to rescale (give a range)")
+    if value_range is not None:
+        low, high = check_range(value_range)
+    else:
+        low, high = values.min(), values.max()
+        if not high > low:
+            raise StippleError(f"{name}: map is constant ({low:g}); nothing to rescale (give a range)")
     # Halving first keeps high - low finite for values near the float64 limits.
     return np.clip((values / 2 - low / 2) / (high / 2 - low / 2), 0.0, 1.0)
 
@@ -116,6 +211,8 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
     name = name or str(getattr(source, "name", source))
     if not gamma > 0 or not np.isfinite(gamma):
         raise StippleError(f"gamma must be a positive number, not {gamma}")
+    if value_range is not None:
+        check_range(value_range)
     data = read_source(source)
     if not data:
         raise StippleError(f"{name}: file is empty")
@@ -128,9 +225,15 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
 
 
 def read_points_csv(source, names):
-    """Columns ``names`` of a CSV with a header row (as written by stipple) as an ``(M, len(names))`` array."""
+    """Columns ``names`` of a CSV with a header row (as written by stipple) as an ``(M, len(names))`` array.
+
+    UTF-8 text (a byte-order mark is skipped); values must be finite numbers.
+    """
     name = str(getattr(source, "name", source))
-    text = read_source(source).decode("utf-8", errors="replace")
+    try:
+        text = read_source(source).decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise StippleError(f"{name}: points file is not UTF-8 text") from None
     lines = [line.strip() for line in text.splitlines() if line.strip()]
     if not lines:
         raise StippleError(f"{name}: empty points file")
@@ -139,10 +242,13 @@ def read_points_csv(source, names):
     if missing:
         raise StippleError(f"{name}: expected CSV columns {','.join(names)}, got {lines[0]!r}")
     indices = [header.index(column) for column in names]
-    try:
-        rows = [[float(line.split(",")[i]) for i in indices] for line in lines[1:]]
-    except (ValueError, IndexError):
-        raise StippleError(f"{name}: malformed CSV row") from None
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        try:
+            cells = line.split(",")
+            rows.append([float(cells[i]) for i in indices])
+        except (ValueError, IndexError):
+            raise StippleError(f"{name}: malformed CSV row {number}: {line[:80]!r}") from None
     points = np.array(rows, dtype=np.float64).reshape(-1, len(names))
     if len(points) == 0:
         raise StippleError(f"{name}: no points")

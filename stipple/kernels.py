@@ -84,7 +84,7 @@ def sphere_kernel(kernel, degrees):
 # Near-field split: K = K_R + K_near with K_near supported in a small ball and K_R smooth enough for the transforms.
 
 
-def ball_profile(distance):
+def ball_profile(distance, orders=5):
     """The ball-discrepancy kernel in space and its first four derivatives, as functions of the distance ``d``.
 
     ``kappa(d) = int_0^{1/2} |B(0, r) ∩ B(d e_1, r)| dr`` is the R² kernel whose Fourier transform is ``kB``
@@ -96,20 +96,22 @@ def ball_profile(distance):
     d = np.asarray(distance, dtype=float)
     root = np.sqrt(1 - d * d)
     asech = np.arccosh(1 / d)
-    return (
-        np.pi / 24 - d * root / 6 - np.arcsin(d) / 12 + d**3 * asech / 12,
-        -root / 4 + d * d * asech / 4,
+    square = d * d
+    values = (
+        np.pi / 24 - d * root / 6 - np.arcsin(d) / 12 + square * d * asech / 12,
+        (square * asech - root) / 4,
         d * asech / 2,
-        (asech - 1 / root) / 2,
-        -(1 / (d * root) + d / root**3) / 2,
     )
+    if orders == 3:
+        return values
+    return values + ((asech - 1 / root) / 2, -(1 / (d * root) + d / root**3) / 2)
 
 
-def chord_profile(distance):
+def chord_profile(distance, orders=5):
     """``-r`` and its derivatives: the distance kernel on S² as a function of the chordal distance ``r``."""
     r = np.asarray(distance, dtype=float)
     zero = np.zeros_like(r)
-    return (-r, zero - 1.0, zero, zero, zero)
+    return (-r, zero - 1.0, zero, zero, zero)[:orders]
 
 
 class NearKernel:
@@ -123,7 +125,8 @@ class NearKernel:
     Parameters
     ----------
     profile : callable
-        ``profile(r) -> (g, g', g'', g''', g'''')`` at one distance (``ball_profile`` or ``chord_profile``).
+        ``profile(r, orders)``: the first ``orders`` of ``g`` and its derivatives up to the fourth at distances ``r``
+        (``ball_profile`` or ``chord_profile``).
     radius : float
         Support radius, in the units of ``profile``'s argument.
     """
@@ -144,9 +147,13 @@ class NearKernel:
         """``(K, K', K'')`` at distances ``r`` (zero at and beyond the radius; one-sided limits at 0)."""
         r = np.asarray(r, dtype=float)
         inside = r < self.radius
-        g, g1, g2, _, _ = self.profile(np.clip(r, 1e-300, self.radius))
+        return tuple(np.where(inside, value, 0.0) for value in self.values_inside(np.clip(r, 0.0, self.radius)))
+
+    def values_inside(self, r):
+        """``(K, K', K'')`` at distances ``0 <= r <= radius`` (one-sided limits at 0)."""
+        g, g1, g2 = self.profile(np.maximum(r, 1e-300), orders=3)
         q, q1, q2 = self._polynomial(r)
-        return tuple(np.where(inside, a - b, 0.0) for a, b in ((g, q), (g1, q1), (g2, q2)))
+        return g - q, g1 - q1, g2 - q2
 
     def _polynomial(self, r):
         a = self.coeffs
@@ -185,7 +192,7 @@ class NearKernel:
         previous, current = np.ones_like(t), t.copy()
         coeffs[0] = integrand.sum()
         for n in range(1, lmax + 1):
-            coeffs[n] = np.dot(integrand, current)
+            coeffs[n] = np.einsum("i,i->", integrand, current)
             previous, current = current, ((2 * n + 1) * t * current - n * previous) / (n + 1)
         return 2 * np.pi * coeffs
 

@@ -3,13 +3,14 @@
 The curve-based approximation of Ehler, Gräf, Neumayer and Steidl (Found. Comput. Math. 2021): vertices
 ``p_1..p_M`` of a closed polygon, equally spaced along it, carry the equal-weight quadrature ``lam sum_i f(p_i)``
 of the curve's length measure, and minimise the same ``E_N`` (transforms, ball kernel, near field, CG) as the dots
-of ``stipple torus``. The speed constraint ``|p_{i+1} - p_i| <= h = L/M`` (length at most ``L``) and a box
-constraint (the curve stays inside the image's rectangle, so the drawing never wraps across the torus seam) are
-quadratic penalties, objects composed with ``SumObjective``; ``draw_line`` drives their weight up in phases until
-``max |p_{i+1} - p_i| <= (1 + constraint_tol) h``.
+of ``stipple torus``. The speed constraint ``|p_{i+1} - p_i| = h = L/M`` is a quadratic penalty, an object
+composed with ``SumObjective``; ``draw_line`` drives its weight up in phases until every segment is within
+``constraint_tol`` (1 %) of ``h``. The curve lives in the image's rectangle (``Rectangle``: steps are clipped to
+it, not wrapped), so the drawing never crosses the torus seam; the transforms stay periodic.
 
-The near field leaves out pairs of vertices fewer than ``neighbours`` steps apart along the curve: they are meant
-to be close (``h`` is below the stroke spacing) and their repulsion would only stretch the curve.
+The near field leaves out pairs of vertices up to ``exclude`` steps apart along the curve (the near-field radius
+over ``h``, plus one): they are meant to be close (``h`` is below the stroke spacing) and their repulsion would
+only stretch the curve.
 """
 
 import json
@@ -122,41 +123,17 @@ class SpeedConstraint:
         return products
 
 
-class BoxConstraint:
-    """``(mu / 2) sum_i sum_axes (distance of p_i outside [0, side] / h)²``: keeps the curve inside the picture."""
-
-    def __init__(self, step, weight, scale):
-        self.step = float(step)
-        self.weight = float(weight)
-        self.scale = np.asarray(scale, dtype=float)
-
-    def set_points(self, points):
-        physical = points * self.scale
-        self._outside = np.minimum(physical, 0.0) + np.maximum(physical - self.scale, 0.0)
-
-    def energy(self):
-        return 0.5 * self.weight / self.step**2 * float(np.sum(self._outside**2))
-
-    def gradient(self):
-        return self.weight / self.step**2 * self._outside * self.scale
-
-    def hessian_gram(self, vectors):
-        active = (self._outside != 0) * self.scale**2 * (self.weight / self.step**2)
-        return np.array([[float(np.sum(active * a * b)) for b in vectors] for a in vectors])
-
-    def hessian_vectors(self, vectors):
-        active = (self._outside != 0) * self.scale**2 * (self.weight / self.step**2)
-        return [active * vector for vector in vectors]
-
-
 class Rectangle(Torus):
-    """The image's rectangle inside the torus: points are not wrapped (the box constraint keeps them inside)."""
+    """The image's rectangle inside the torus: a step is clipped to the rectangle instead of wrapped.
+
+    The transforms stay periodic, but no vertex ever crosses the seam, so the closed polygon is drawn as optimised.
+    """
 
     def retract(self, points, v):
-        return points + v
+        return np.clip(points + v, 0.0, 1.0)
 
     def canonical(self, points):
-        return np.asarray(points, dtype=np.float64)
+        return np.clip(np.asarray(points, dtype=np.float64), 0.0, 1.0)
 
 
 def curve_neighbours(count, steps):
@@ -181,7 +158,7 @@ def line_problem(
     backend="ducc0",
     hessian="gauss-newton",
 ):
-    """The one-line problem: discrepancy of the curve measure, curve near field, speed and box penalties.
+    """The one-line problem: discrepancy of the curve measure, curve near field, speed penalty.
 
     Parameters
     ----------
@@ -194,7 +171,7 @@ def line_problem(
     bandwidth : int, optional
         Even bandwidth N along the longer side (default ``default_line_bandwidth``).
     penalty : float
-        Weight of the speed and box penalties relative to ``penalty_scale`` (``draw_line`` raises it in phases).
+        Weight of the speed penalty relative to ``penalty_scale`` (``draw_line`` raises it in phases).
     threads, epsilon, backend : see ``stipple.torus.torus_problem``.
     hessian : {"gauss-newton", "full"}
         "full" makes every term's Hessian exact (for tests); the default keeps CG's curvature positive.
@@ -202,7 +179,7 @@ def line_problem(
     Returns
     -------
     Problem
-        ``objective = SumObjective(discrepancy, near field, speed, box)``; ``settings['domain'] == 'line'``.
+        ``objective = SumObjective(discrepancy, near field, speed)``; ``settings['domain'] == 'line'``.
     """
     weights = check_weights(weights)
     n_vertices = check_count(n_vertices)
@@ -227,19 +204,19 @@ def line_problem(
         exclude=curve_neighbours(n_vertices, steps),
     )
     mu = penalty * penalty_scale(discrepancy, n_vertices)
-    speed, box = SpeedConstraint(step, mu, scale, hessian), BoxConstraint(step, mu, scale)
+    speed = SpeedConstraint(step, mu, scale, hessian)
     settings = {**dots.settings, "domain": "line", "length": length, "penalty": float(penalty), "exclude": steps}
     problem = Problem(
         domain="torus",
         manifold=Rectangle(scale),
-        objective=SumObjective(discrepancy, near, speed, box),
+        objective=SumObjective(discrepancy, near, speed),
         discrepancy=discrepancy,
         n_points=n_vertices,
         bandwidth=dots.bandwidth,
         sample=lambda rng, count: initial_loop(weights, count, length, rng),
         settings=settings,
     )
-    problem.speed, problem.box, problem.step, problem.length = speed, box, step, length
+    problem.speed, problem.step, problem.length = speed, step, length
     return problem
 
 
@@ -350,7 +327,7 @@ def draw_line(
 
     Phase 0 runs CG with penalty weight 1 (``penalty_scale``) for up to ``iterations``; every following phase
     multiplies it by 8 and runs up to ``phase_iterations`` more (default ``iterations // 4``), until the longest
-    segment is at most ``(1 + constraint_tol) L / M`` and every vertex is inside the picture (within 1 % of ``h``).
+    segment is within ``constraint_tol`` of ``h = L / M``.
 
     Parameters
     ----------
@@ -436,16 +413,13 @@ def draw_line(
 
 
 def constraints_hold(problem, points, constraint_tol):
-    """Every segment within ``(1 ± constraint_tol) h`` and every vertex within ``0.01 h`` of the picture."""
-    problem.box.set_points(points)
-    inside = np.abs(problem.box._outside).max(initial=0.0) <= 0.01 * problem.step
+    """Every segment within ``(1 ± constraint_tol) h``."""
     problem.speed.set_points(points)
-    deviation = np.abs(problem.speed.segment_lengths() / problem.step - 1).max()
-    return deviation <= constraint_tol and bool(inside)
+    return np.abs(problem.speed.segment_lengths() / problem.step - 1).max() <= constraint_tol
 
 
 def line_points(points):
-    """Vertices clipped into the unit rectangle (the box penalty leaves them at most a hair outside)."""
+    """Vertices in the unit rectangle (``Rectangle`` keeps them there; a given ``init`` is clipped on entry)."""
     return np.clip(points, 0.0, 1.0)
 
 

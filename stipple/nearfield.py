@@ -7,7 +7,8 @@ the part supported in a ball of radius ``eps``, as the pair energy
     E_near(p) = lam² sum_{i, j} K_near(p_i - p_j)        (``i = j`` included: a constant)
 
 with neighbours found by a k-d tree (periodic on the torus, chordal distance on the sphere) and kept in a Verlet
-list: pairs within ``eps (1 + skin)`` are searched again only when a point has moved more than ``eps skin / 2``.
+list: pairs within ``eps (1 + skin)`` are searched again only when many points have moved more than
+``eps skin / 2``; the few that did are looked up on their own.
 """
 
 import numpy as np
@@ -23,14 +24,18 @@ class TorusPairs:
     def positions(self, points):
         return np.mod(points, 1.0) * self.scale
 
-    def pairs(self, positions, radius):
-        tree = cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
-        return tree.query_pairs(radius, output_type="ndarray")
+    def tree(self, positions):
+        return cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
 
     def displacement(self, start, end):
         """Shortest periodic displacement from ``end`` to ``start`` (``start - end``), row by row."""
         delta = start - end
         delta -= self.scale * np.round(delta / self.scale)
+        return delta
+
+    def wrap(self, delta, axis):
+        """One component of displacements, made shortest along ``axis`` (in place)."""
+        delta -= self.scale[axis] * np.round(delta / self.scale[axis])
         return delta
 
     def to_physical(self, vectors):
@@ -48,11 +53,14 @@ class SpherePairs:
     def positions(self, points):
         return points
 
-    def pairs(self, positions, radius):
-        return cKDTree(positions).query_pairs(radius, output_type="ndarray")
+    def tree(self, positions):
+        return cKDTree(positions)
 
     def displacement(self, start, end):
         return start - end
+
+    def wrap(self, delta, axis):
+        return delta
 
     def to_physical(self, vectors):
         return vectors
@@ -95,21 +103,29 @@ class NearField:
         self.counts = {"pair_searches": 0}
 
     def set_points(self, points):
-        """Find the pairs closer than the radius and evaluate the kernel on them."""
+        """Find the pairs closer than the radius and evaluate the kernel on them.
+
+        Per-pair quantities are kept as one 1-D array per coordinate: numpy's reductions over them are several
+        times faster than over ``(pairs, 2)`` arrays.
+        """
         positions = self.geometry.positions(points)
         self._update_candidates(positions)
         first, second = self._candidates
-        delta = self.geometry.displacement(positions[first], positions[second])
-        distance = np.sqrt(np.einsum("ij,ij->i", delta, delta))
+        if self.exclude is not None:
+            kept = ~self.exclude(first, second)
+            first, second = first[kept], second[kept]
+        columns = np.ascontiguousarray(positions.T)
+        delta = [self.geometry.wrap(column[first] - column[second], axis) for axis, column in enumerate(columns)]
+        distance = np.sqrt(sum(component * component for component in delta))
         inside = np.flatnonzero(distance < self.kernel.radius)
-        first, second, delta, distance = first[inside], second[inside], delta[inside], distance[inside]
-        value, slope, curvature = self.kernel.values(distance)
+        first, second, distance = first[inside], second[inside], distance[inside]
+        value, slope, curvature = self.kernel.values_inside(distance)
         safe = np.maximum(distance, 1e-9 * self.kernel.radius)
         self._points = points
         self._pairs = (first, second, len(points))
-        self._unit = delta / safe[:, None]
+        self._unit = [component[inside] / safe for component in delta]
         self._energy = self.self_energy_per_point * len(points) + self.pair_factor * float(value.sum())
-        self._slope = np.where(distance > 0, slope, 0.0)
+        self._slope = slope
         self._radial, self._tangential = curvature, slope / safe
         if self.hessian == "gauss-newton":
             self._radial, self._tangential = np.abs(self._radial), np.abs(self._tangential)
@@ -117,15 +133,45 @@ class NearField:
         self._gradient = None
 
     def _update_candidates(self, positions):
-        """Search pairs within ``radius (1 + skin)`` again once some point moved more than ``radius skin / 2``."""
-        if self._reference is not None and len(self._reference) == len(positions):
-            moved = self.geometry.displacement(positions, self._reference)
-            if np.max(np.einsum("ij,ij->i", moved, moved), initial=0.0) < (self.kernel.radius * self.skin / 2) ** 2:
-                return
-        found = self.geometry.pairs(positions, self.kernel.radius * (1 + self.skin))
-        if self.exclude is not None:
-            found = found[~self.exclude(found[:, 0], found[:, 1])]
-        self._candidates = (found[:, 0], found[:, 1])
+        """Candidate pairs for the current positions: the Verlet list, patched for the few points that moved far.
+
+        Pairs are kept in index order (``_ordered``). Pairs within ``radius (1 + skin)`` at the reference
+        positions contain every pair now within the radius unless one of its points moved more than
+        ``radius skin / 2`` (a "mover"). Pairs of movers are taken again from the reference tree (around their
+        current positions) and among themselves; the whole list is searched again when movers are more than
+        1 % of the points (at most 256).
+        """
+        if self._reference is None or len(self._reference) != len(positions):
+            return self._search(positions)
+        moved = self.geometry.displacement(positions, self._reference)
+        limit = self.kernel.radius * self.skin / 2
+        movers = np.flatnonzero(np.einsum("ij,ij->i", moved, moved) > limit**2)
+        if movers.size > min(max(16, 0.01 * len(positions)), 256):
+            return self._search(positions)
+        first, second = self._verlet
+        if movers.size == 0:
+            self._candidates = self._verlet
+            return
+        is_mover = np.zeros(len(positions), dtype=bool)
+        is_mover[movers] = True
+        settled = ~(is_mover[first] | is_mover[second])
+        found = self._tree.query_ball_point(positions[movers], self.kernel.radius + limit)
+        near_first = np.repeat(movers, [len(items) for items in found])
+        near_second = np.concatenate([np.asarray(items, dtype=np.intp) for items in found] + [np.empty(0, np.intp)])
+        others = ~is_mover[near_second]
+        among_first, among_second = np.triu_indices(movers.size, 1)
+        added = _ordered(
+            np.concatenate([near_first[others], movers[among_first]]),
+            np.concatenate([near_second[others], movers[among_second]]),
+            len(positions),
+        )
+        self._candidates = _merge_ordered((first[settled], second[settled]), added, len(positions))
+
+    def _search(self, positions):
+        """A new Verlet list: all pairs within ``radius (1 + skin)``, and the tree for later patches."""
+        self._tree = self.geometry.tree(positions)
+        found = self._tree.query_pairs(self.kernel.radius * (1 + self.skin), output_type="ndarray")
+        self._verlet = self._candidates = _ordered(found[:, 0], found[:, 1], len(positions))
         self._reference = positions.copy()
         self.counts["pair_searches"] += 1
 
@@ -139,25 +185,26 @@ class NearField:
     def gradient(self):
         """``dE/dx_i = 2 lam² factor sum_j K_near'(r_ij) (x_i - x_j) / r_ij`` as a differential."""
         if self._gradient is None:
-            force = self.pair_factor * self._slope[:, None] * self._unit
-            self._gradient = self._scatter(force)
+            force = self.pair_factor * self._slope
+            self._gradient = self._scatter([force * unit for unit in self._unit])
         return self.geometry.covector(self._gradient)
 
-    def _scatter(self, pair_vectors):
-        """``sum_j v_ij`` at ``i`` minus the same at ``j``, for one vector per pair."""
+    def _scatter(self, pair_components):
+        """``sum_j v_ij`` at ``i`` minus the same at ``j``, for one vector per pair (given by components)."""
         first, second, count = self._pairs
         columns = [
             np.bincount(first, weights=column, minlength=count) - np.bincount(second, weights=column, minlength=count)
-            for column in pair_vectors.T
+            for column in pair_components
         ]
         return np.stack(columns, axis=1)
 
     def _pair_components(self, vector):
-        """Radial component and full difference ``d_i - d_j`` of a tangent field, per pair."""
+        """Radial component and components of the difference ``d_i - d_j`` of a tangent field, per pair."""
         first, second, _ = self._pairs
-        physical = self.geometry.to_physical(vector)
-        difference = physical[first] - physical[second]
-        return np.einsum("ij,ij->i", difference, self._unit), difference
+        columns = np.ascontiguousarray(self.geometry.to_physical(vector).T)
+        difference = [column[first] - column[second] for column in columns]
+        radial = sum(component * unit for component, unit in zip(difference, self._unit, strict=True))
+        return radial, difference
 
     def hessian_gram(self, vectors):
         """``G[a, b] = sum_pairs 2 lam² factor (K'' ra rb + K'/r (da . db - ra rb))`` (+ Weingarten, see class)."""
@@ -167,8 +214,8 @@ class NearField:
         for a in range(count):
             for b in range(a, count):
                 (ra, da), (rb, db) = components[a], components[b]
-                across = np.dot(self._tangential, np.einsum("ij,ij->i", da, db))
-                along = np.dot(self._radial_excess, ra * rb)
+                across = sum(np.einsum("i,i,i->", self._tangential, x, y) for x, y in zip(da, db, strict=True))
+                along = np.einsum("i,i,i->", self._radial_excess, ra, rb)
                 gram[a, b] = gram[b, a] = self.pair_factor * (across + along) + self._weingarten(vectors[a], vectors[b])
         return gram
 
@@ -177,9 +224,11 @@ class NearField:
         products = []
         for vector in vectors:
             radial, difference = self._pair_components(vector)
-            along = radial[:, None] * self._unit
-            pair_vectors = self._radial[:, None] * along + self._tangential[:, None] * (difference - along)
-            product = self.geometry.covector(self._scatter(self.pair_factor * pair_vectors))
+            pair_components = [
+                self.pair_factor * (self._radial_excess * radial * unit + self._tangential * component)
+                for component, unit in zip(difference, self._unit, strict=True)
+            ]
+            product = self.geometry.covector(self._scatter(pair_components))
             products.append(product + self._weingarten_vector(vector))
         return products
 
@@ -191,8 +240,23 @@ class NearField:
 
     def _weingarten(self, u, v):
         weights = self._curvature_weights()
-        return 0.0 if weights is None else float(np.dot(weights, np.einsum("ij,ij->i", u, v)))
+        return 0.0 if weights is None else float(np.einsum("i,ij,ij->", weights, u, v))
 
     def _weingarten_vector(self, vector):
         weights = self._curvature_weights()
         return 0.0 if weights is None else weights[:, None] * vector
+
+
+def _ordered(first, second, count):
+    """Pairs as ``(min, max)``, sorted: the sums then do not depend on how the list was found (so a resumed run,
+    which searches its list afresh, repeats the uninterrupted run bit for bit)."""
+    low, high = np.minimum(first, second), np.maximum(first, second)
+    order = np.argsort(low.astype(np.int64) * count + high, kind="stable")
+    return low[order], high[order]
+
+
+def _merge_ordered(pairs, added, count):
+    """Two sorted pair lists with no pair in common as one sorted list."""
+    keys = pairs[0].astype(np.int64) * count + pairs[1]
+    where = np.searchsorted(keys, added[0].astype(np.int64) * count + added[1])
+    return np.insert(pairs[0], where, added[0]), np.insert(pairs[1], where, added[1])

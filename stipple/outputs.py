@@ -1,9 +1,12 @@
-"""Writing dots: CSV, SVG, PNG and GeoJSON, always atomically (temporary file, fsync, rename)."""
+"""Writing dots: CSV, SVG, PNG and GeoJSON, all-or-nothing (every temporary file fsynced, then all renamed)."""
 
+import contextlib
 import io
 import json
 import os
 import re
+import signal
+import sys
 import tempfile
 
 import numpy as np
@@ -29,12 +32,16 @@ def output_format(path):
 def check_writable(path):
     """Raise if the directory of ``path`` cannot take a new file (checked before a long run)."""
     if str(path) == "-":
+        if sys.stdout is None:
+            raise StippleError("cannot write to stdout: it is closed")
         return
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
+        raise StippleError(f"{path}: is read-only; make it writable or choose another name")
     try:
         with tempfile.TemporaryFile(dir=directory):
             pass
@@ -44,6 +51,40 @@ def check_writable(path):
 
 def atomic_write(path, data):
     """Write ``data`` (bytes) to ``path`` so that readers see the old file or the whole new one."""
+    commit_outputs([(path, data)])
+
+
+def commit_outputs(items):
+    """Write every ``(path, bytes)`` of ``items`` all-or-nothing (``-`` is stdout).
+
+    Each file is first written to a temporary file beside it (flushed and fsynced); only when all of
+    them are written (and stdout has taken its share) are they renamed over their targets, with SIGINT
+    and SIGTERM held back during the renames. Any failure or signal before that removes every temporary
+    file and leaves every existing output as it was.
+    """
+    temporaries = []
+    try:
+        for path, data in items:
+            if str(path) != "-":
+                temporaries.append((_write_temporary(path, data), path))
+        for path, data in items:
+            if str(path) == "-":
+                write_stdout(data)
+        with _signals_held():
+            while temporaries:
+                temporary, path = temporaries[0]
+                try:
+                    os.replace(temporary, path)
+                except OSError as error:
+                    raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+                temporaries.pop(0)
+    finally:
+        for temporary, _ in temporaries:
+            _remove(temporary)
+
+
+def _write_temporary(path, data):
+    """A fsynced temporary file in the directory of ``path`` holding ``data``, with the mode ``path`` will get."""
     directory = os.path.dirname(os.path.abspath(path))
     try:
         handle, temporary = tempfile.mkstemp(dir=directory, prefix=".stipple-", suffix=".tmp")
@@ -54,14 +95,68 @@ def atomic_write(path, data):
             stream.write(data)
             stream.flush()
             os.fsync(stream.fileno())
-        if os.path.exists(path):
-            os.chmod(temporary, os.stat(path).st_mode & 0o777)
-        else:
-            os.chmod(temporary, 0o666 & ~_umask())
-        os.replace(temporary, path)
-    except OSError as error:
-        os.unlink(temporary)
-        raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+        mode = os.stat(path).st_mode & 0o777 if os.path.exists(path) else 0o666 & ~_umask()
+        os.chmod(temporary, mode)
+    except BaseException as error:
+        _remove(temporary)
+        if isinstance(error, OSError):
+            raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+        raise
+    return temporary
+
+
+def _remove(path):
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM received in the block are delivered after it (main thread only; else a no-op).
+
+    The Python-level handlers are swapped for a recorder, which works whichever thread the kernel
+    picks for the signal; recorded signals are raised again once the previous handlers are back.
+    """
+    caught = []
+    previous = {}
+    try:
+        for number in (signal.SIGINT, signal.SIGTERM):
+            previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
+    except ValueError:  # not the main thread: signals cannot be handled here anyway
+        pass
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+        for number in dict.fromkeys(caught):
+            signal.raise_signal(number)
+
+
+def write_stdout(data):
+    """Write ``data`` (bytes) to stdout; a closed or full stdout is a StippleError, not a traceback."""
+    stream = sys.stdout
+    if stream is None:
+        raise StippleError("cannot write to stdout: it is closed")
+    try:
+        stream.flush()
+        stream.buffer.write(data)
+        stream.buffer.flush()
+    except (OSError, ValueError) as error:
+        _discard_stdout()
+        raise StippleError(f"cannot write to stdout ({getattr(error, 'strerror', None) or error})") from None
+
+
+def _discard_stdout():
+    """Point stdout at /dev/null so that the interpreter's final flush cannot fail a second time."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _umask():
@@ -70,12 +165,23 @@ def _umask():
     return mask
 
 
-def parse_length(text):
-    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"800px"`` or a bare number (mm) -> (value, unit)."""
+MIN_LENGTH_MM = 1e-3
+MAX_LENGTH_MM = 1e6
+
+
+def parse_length(text, name="length"):
+    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"800px"`` or a bare number (mm) -> (value, unit).
+
+    The length must lie between ``MIN_LENGTH_MM`` (1 µm) and ``MAX_LENGTH_MM`` (1 km).
+    """
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|in|px)?\s*", str(text))
-    if not match or float(match.group(1)) <= 0:
-        raise StippleError(f"length must be a positive number with a unit (mm, cm, in, px), not {text!r}")
-    return float(match.group(1)), match.group(2) or "mm"
+    allowed = f"a number with a unit (mm, cm, in, px) from {MIN_LENGTH_MM:g}mm to {MAX_LENGTH_MM:g}mm"
+    if not match:
+        raise StippleError(f"{name} must be {allowed}, not {text!r}")
+    value, unit = float(match.group(1)), match.group(2) or "mm"
+    if not MIN_LENGTH_MM <= value * UNITS[unit] <= MAX_LENGTH_MM:
+        raise StippleError(f"{name} must be {allowed}, not {text!r}")
+    return value, unit
 
 
 def csv_bytes(columns, names, number_format=".6f"):
@@ -107,15 +213,49 @@ def svg_bytes(centres, size, physical_width, radius, comment=""):
     return "\n".join(parts).encode()
 
 
+MAX_CANVAS_SIDE = 1 << 20
+
+
+def png_canvas(size, pixels_wide):
+    """Scale and ``(width, height)`` of the supersampled canvas for a PNG ``pixels_wide`` wide of ``size``."""
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    return scale, (int(round(width * scale)), int(round(height * scale)))
+
+
+def check_png_canvas(size, pixels_wide, layers=2):
+    """Refuse a PNG whose drawing canvas is too large for a side limit or for the memory available.
+
+    ``layers`` counts the canvas-sized images alive at once (the canvas and a background).
+    """
+    from .halftone import available_memory
+
+    _, (columns, rows) = png_canvas(size, pixels_wide)
+    picture = f"a PNG {pixels_wide} pixels wide of a {size[0]:g}×{size[1]:g} canvas"
+    if max(columns, rows) > MAX_CANVAS_SIDE:
+        raise StippleError(
+            f"{picture} would be {columns // SUPERSAMPLE}×{rows // SUPERSAMPLE} pixels, more than "
+            f"{MAX_CANVAS_SIDE // SUPERSAMPLE} per side: use a smaller --png-width, or SVG"
+        )
+    if min(columns, rows) < SUPERSAMPLE:
+        raise StippleError(f"{picture} would be less than one pixel high or wide: use a larger --png-width, or SVG")
+    needed, available = columns * rows * layers * 1.1, available_memory()
+    if needed > available:
+        raise StippleError(
+            f"{picture} needs about {needed / 2**30:.1f} GiB of memory to draw, more than the "
+            f"{available / 2**30:.1f} GiB available: use a smaller --png-width, or SVG"
+        )
+
+
 def render_dots(centres, size, pixels_wide, radius, background=None):
     """An antialiased grayscale PNG of black discs on white (or on ``background``, a PIL image).
 
     ``centres`` and ``radius`` are in user units of a canvas of ``size = (width, height)``; the picture
-    is ``pixels_wide`` pixels wide, drawn at 4× and reduced with a box filter.
+    is ``pixels_wide`` pixels wide, drawn at 4× and reduced with a box filter. The canvas's memory is
+    checked before it is allocated.
     """
-    width, height = size
-    scale = pixels_wide / width * SUPERSAMPLE
-    canvas_size = (int(round(width * scale)), int(round(height * scale)))
+    check_png_canvas(size, pixels_wide)
+    scale, canvas_size = png_canvas(size, pixels_wide)
     canvas = Image.new("L", canvas_size, 255)
     if background is not None:
         canvas.paste(background.resize(canvas_size, Image.BILINEAR))
@@ -158,6 +298,12 @@ def default_png_width(count):
     return int(max(1024, 8 * round(np.sqrt(count) / 2)))
 
 
+def check_png_outputs(formats, canvas, png_width, count):
+    """Before a run: refuse PNG outputs whose canvas (user units ``(width, height)``) would not fit in memory."""
+    if ".png" in formats:
+        check_png_canvas(canvas, png_width or default_png_width(count))
+
+
 def torus_output(points, shape, fmt, *, width=(200.0, "mm"), dot_radius=None, png_width=None, ink=None):
     """Bytes of torus ``points`` (unit coordinates) in ``fmt`` for an image of ``shape = (H, W)``.
 
@@ -182,6 +328,13 @@ def torus_output(points, shape, fmt, *, width=(200.0, "mm"), dot_radius=None, pn
 
 ORTHO_SIZE = 1000.0
 PROJECTIONS = ("ortho", "equirect")
+
+
+def sphere_canvas(projection, fmt=".png"):
+    """``(width, height)`` in user units of a sphere picture: the equirectangular map or the globe."""
+    if projection == "equirect" and fmt == ".png":
+        return (ORTHO_SIZE * 2, ORTHO_SIZE)
+    return (ORTHO_SIZE, ORTHO_SIZE)
 
 
 def orthographic(points, view):
@@ -227,12 +380,11 @@ def sphere_output(
     if fmt in (".geojson", ".json"):
         return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
     angular_radius = 2 * np.sqrt((0.5 if ink is None else ink) / len(points))
+    canvas = sphere_canvas(projection, fmt)
     if projection == "equirect" and fmt == ".png":
-        canvas = (ORTHO_SIZE * 2, ORTHO_SIZE)
         centres = equirectangular(longitude, latitude, canvas[0])
         radius = angular_radius * canvas[0] / (2 * np.pi)
     else:
-        canvas = (ORTHO_SIZE, ORTHO_SIZE)
         centres, visible = orthographic(points, view)
         centres = centres[visible]
         radius = angular_radius * 0.98 * ORTHO_SIZE / 2

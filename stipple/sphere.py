@@ -34,14 +34,14 @@ MODES_PER_SPACING = 8.52
 # Near-field chordal radius times the degree: eps = 3 pi / N, as on the torus (eps = 3 / (2 rho_max) with the
 # highest frequency rho_max = N / (2 pi) of degree N).
 NEAR_FIELD_REACH = 3 * np.pi
-NEAR_FIELD_SPACINGS = 3.0
+NEAR_FIELD_SPACINGS = 5.0
 
 
 def default_bandwidth(n_points, density=None):
     """Degree N from the dots' mean spacing and, given a density, its peak (as ``stipple.torus.default_bandwidth``).
 
     ``N = 8.52 / s`` (the paper's ``2.24 sqrt(M)``), raised where the density is peaked so that the near-field
-    radius ``3 pi / N`` is at most three local spacings of the densest region (at most ``MAX_BANDWIDTH``).
+    radius ``3 pi / N`` is at most five local spacings of the densest region (at most ``MAX_BANDWIDTH``).
     """
     spacing = hexagonal_spacing(n_points, 4 * np.pi)
     bandwidth = MODES_PER_SPACING / spacing

@@ -131,7 +131,7 @@ def test_decompression_bomb(files, monkeypatch):
         (["--epsilon", "1e-20"], "epsilon must be a number"),
         (["--time-limit", "-3"], "time_limit must be a positive number"),
         (["--checkpoint-every", "soon"], "checkpoint-every must be like"),
-        (["--dot-radius", "-1mm"], "length must be a positive number"),
+        (["--dot-radius", "-1mm"], "dot-radius must be a number with a unit"),
     ],
 )
 def test_bad_numbers(files, option, message):
@@ -194,7 +194,7 @@ def test_truncated_checkpoint(files):
 
 def test_corrupt_checkpoint(files):
     text = resume(files, write(files[0] / "noise.npz", bytes(range(256)) * 10))
-    assert "corrupt or truncated checkpoint" in text
+    assert "not a stipple checkpoint (not a .npz archive)" in text
 
 
 def test_foreign_checkpoint(files):

@@ -15,10 +15,12 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
     runpy.run_path(str(ROOT / "bench" / "run.py"), run_name="__main__")
     report = json.loads(output.read_text())
     assert {"ducc0", "finufft", "numpy"} <= set(report["versions"])
-    assert [case["domain"] for case in report["cases"]] == ["torus", "torus", "sphere"]
+    assert [case["domain"] for case in report["cases"]] == ["torus"] * 3 + ["sphere"] * 4
+    assert [case["near_field"] for case in report["cases"]] == [True, False, True, True, False, True, False]
     for case in report["cases"]:
         assert case["seconds_per_iteration"] > 0 and case["raw_transform_seconds_per_iteration"] > 0
-        assert {"M", "N", "threads", "backend", "transforms_per_iteration"} <= set(case)
+        assert {"M", "N", "threads", "backend", "transforms_per_iteration", "peak_memory_mb"} <= set(case)
+        assert (case["near_field_pairs"] > 0) == case["near_field"]
 
 
 def load_quality():

@@ -70,7 +70,7 @@ def test_init_from_csv_continues_from_those_points(image_path, tmp_path):
         (["-N", -4], "bandwidth must be an even integer"),
         (["-o", "dots.xyz"], "unknown output format .xyz"),
         (["-o", "/nonexistent-dir/dots.csv"], "does not exist"),
-        (["--width", "wide"], "length must be a positive number"),
+        (["--width", "wide"], "width must be a number with a unit"),
         (["--gamma", 0], "gamma must be a positive number"),
         (["--tol", -1], "tol must be a positive number"),
     ],

@@ -6,7 +6,6 @@ from conftest import taylor_slope
 
 from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import (
-    BoxConstraint,
     SpeedConstraint,
     draw_line,
     hilbert_index,
@@ -20,11 +19,10 @@ STEPS = np.logspace(-2.5, -4, 6)
 
 
 def small_line(rng, hessian="full", penalty=3.0):
-    """A 40-vertex loop on a 12×20 image, a few vertices pushed outside, every term active."""
+    """A 40-vertex loop on a 12×20 image, perturbed so that some segments are stretched and some compressed."""
     weights = rng.random((12, 20))
     problem = line_problem(weights, 40, length=50.0, bandwidth=14, penalty=penalty, epsilon=1e-13, hessian=hessian)
     points = initial_loop(weights, 40, 50.0, rng) + 0.01 * rng.standard_normal((40, 2))
-    points[:3, 0] = [-0.02, -0.01, 1.015]
     return problem, points
 
 
@@ -35,10 +33,9 @@ def energy_at(objective, points):
 
 def test_every_term_of_the_curve_objective_takes_part(rng):
     problem, points = small_line(rng)
-    discrepancy, near, speed, box = problem.objective.terms
+    discrepancy, near, speed = problem.objective.terms
     problem.objective.set_points(points)
-    assert near.pair_count > 0
-    assert box.energy() > 0 and speed.energy() > 0
+    assert near.pair_count > 0 and speed.energy() > 0
     assert np.any(speed._excess > 0) and np.any(speed._excess < 0)
 
 
@@ -59,7 +56,7 @@ def test_curve_objective_full_hessian_taylor_slope_three(rng, terms):
     problem, points = small_line(rng)
     objective = problem.objective
     if terms == "constraints":
-        objective = SumObjective(problem.speed, problem.box)
+        objective = SumObjective(problem.speed)
     objective.set_points(points)
     energy, gradient = objective.energy(), objective.gradient()
     direction = rng.standard_normal(points.shape)
@@ -73,18 +70,14 @@ def test_curve_objective_full_hessian_taylor_slope_three(rng, terms):
     assert taylor_slope(remainder, STEPS) == pytest.approx(3, abs=0.15)
 
 
-def test_constraint_terms_match_their_direct_sums(rng):
+def test_speed_constraint_matches_its_direct_sum(rng):
     points = rng.random((30, 2)) * 1.2 - 0.1
     scale, step, weight = np.array([1.0, 0.6]), 0.05, 2.5
-    speed, box = SpeedConstraint(step, weight, scale), BoxConstraint(step, weight, scale)
+    speed = SpeedConstraint(step, weight, scale)
     speed.set_points(points)
-    box.set_points(points)
     physical = points * scale
     lengths = np.array([np.linalg.norm(physical[(i + 1) % 30] - physical[i]) for i in range(30)])
     assert speed.energy() == pytest.approx(weight / 2 * np.sum((lengths**2 / step**2 - 1) ** 2), rel=1e-12)
-    outside = np.clip(physical, None, 0) + np.clip(physical - scale, 0, None)
-    assert box.energy() == pytest.approx(weight / 2 * np.sum((outside / step) ** 2), rel=1e-12)
-    assert box.energy() > 0
 
 
 def test_gauss_newton_forms_are_positive_semi_definite(rng):
@@ -142,8 +135,7 @@ def test_line_on_a_uniform_image_holds_the_speed_constraint(uniform_line):
     pixels = result.points * 48
     segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
     assert segments.max() / segments.mean() <= 1.05
-    margin = 0.01 * result.problem.length / 1500 / 48  # the stated box tolerance, 1 % of a segment
-    assert np.all((result.points >= -margin) & (result.points <= 1 + margin))
+    assert np.all((result.points >= 0) & (result.points <= 1))
     assert segments.sum() == pytest.approx(result.problem.length, rel=0.02)
 
 
@@ -160,6 +152,6 @@ def test_line_on_a_uniform_image_has_nearly_uniform_density(uniform_line):
     start = initial_loop(weights, 1500, result.problem.length, rng) * 48
     spread = block_spread(result.points * 48)
     assert spread < 0.5 * block_spread(start)
-    assert spread < 0.06
+    assert spread < 0.08
     similarity = fitted_similarity(weights, line_ink(result.points * 48, weights.shape), blurs=(4.0,))
     assert similarity[0]["psnr"] > 25

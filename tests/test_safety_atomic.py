@@ -1,0 +1,145 @@
+"""Outputs are all-or-nothing: a failed write (disk full, stdout full) leaves every earlier output as it was."""
+
+import errno
+import os
+import subprocess
+
+import pytest
+from safety_helpers import FAST, invoke, leftovers, make_image, refused, snapshot
+
+import stipple.outputs
+
+OUTPUTS = ["-o", "a.csv", "-o", "b.svg", "-o", "c.png"]
+
+
+@pytest.fixture
+def folder(tmp_path):
+    make_image(tmp_path / "in.png")
+    for name in ("a.csv", "b.svg", "c.png"):
+        (tmp_path / name).write_text(f"old {name}\n")
+    return tmp_path
+
+
+def failing_on_call(number, function):
+    """``function`` that raises ENOSPC on its ``number``-th call."""
+    calls = []
+
+    def wrapper(*args):
+        calls.append(args)
+        if len(calls) == number:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return function(*args)
+
+    return wrapper
+
+
+@pytest.mark.parametrize("failing_call", [1, 2, 3])
+def test_a_failed_write_leaves_every_output_untouched(folder, monkeypatch, failing_call):
+    monkeypatch.setattr(os, "fsync", failing_on_call(failing_call, os.fsync))
+    refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "No space left on device")
+
+
+def test_a_failed_rename_removes_the_remaining_temporaries(folder, monkeypatch):
+    monkeypatch.setattr(os, "replace", failing_on_call(1, os.replace))
+    refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "cannot write")
+
+
+def test_render_and_evaluate_commit_together(folder, monkeypatch):
+    (folder / "p.csv").write_text("x,y\n1.5,2.5\n3.5,7.5\n9.5,4.5\n")
+    (folder / "r.json").write_text("old report\n")
+    monkeypatch.setattr(os, "fsync", failing_on_call(2, os.fsync))
+    refused(["render", "p.csv", "--size", "16,12", *OUTPUTS], folder, "No space left")
+    monkeypatch.setattr(os, "fsync", failing_on_call(2, os.fsync))
+    refused(["evaluate", "p.csv", "in.png", "--json", "r.json", "--spectrum", "c.png"], folder, "No space left")
+
+
+def test_a_full_stdout_leaves_the_files_untouched(folder):
+    before = snapshot(folder)
+    with open("/dev/full", "w") as full:
+        result = subprocess.run(
+            [os.sys.executable, "-m", "stipple", "torus", "in.png", *FAST, "-o", "a.csv", "-o", "-"],
+            cwd=folder,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout (No space left on device)"]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
+def test_a_closed_stdout_is_refused_before_the_run(folder):
+    before = snapshot(folder)
+    result = subprocess.run(
+        [os.sys.executable, "-m", "stipple", "torus", "in.png", *FAST, "-o", "a.csv", "-o", "-"],
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        close_fds=True,
+        preexec_fn=lambda: os.close(1),
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
+@pytest.fixture
+def small_filesystem(tmp_path):
+    """A 64 KiB tmpfs (needs root and permission to mount; skipped otherwise)."""
+    mount_point = tmp_path / "small"
+    mount_point.mkdir()
+    try:
+        subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount_point)],
+            check=True,
+            capture_output=True,
+            timeout=10,
+        )
+    except (OSError, subprocess.SubprocessError) as error:
+        pytest.skip(f"cannot mount a small tmpfs here (needs root and CAP_SYS_ADMIN): {error}")
+    try:
+        yield mount_point
+    finally:
+        subprocess.run(["umount", str(mount_point)], check=False, capture_output=True, timeout=10)
+
+
+def fill(directory, leave):
+    """Fill the filesystem of ``directory`` until only ``leave`` bytes (page-rounded) stay free."""
+    handle = os.open(directory / "filler", os.O_WRONLY | os.O_CREAT)
+    try:
+        while os.write(handle, b"\0" * 4096):
+            pass
+    except OSError:
+        pass
+    finally:
+        os.close(handle)
+    size = (directory / "filler").stat().st_size
+    os.truncate(directory / "filler", max(size - leave, 0))
+
+
+def test_on_a_really_full_filesystem_nothing_is_clobbered(folder, small_filesystem):
+    for name in ("a.csv", "b.svg", "c.png"):
+        (small_filesystem / name).write_text(f"old {name}\n")
+    fill(small_filesystem, 8192)  # room for the CSV and the SVG of 30 dots, not for the PNG
+    before = snapshot(small_filesystem)
+    outputs = [arg if arg == "-o" else str(small_filesystem / arg) for arg in OUTPUTS]
+    result = invoke(["torus", "in.png", *FAST, *outputs], folder)
+    assert result.exit_code == 1 and "No space left on device" in result.stderr, result.output
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert snapshot(small_filesystem) == before and leftovers(small_filesystem) == []
+    os.unlink(small_filesystem / "filler")
+    assert invoke(["torus", "in.png", *FAST, *outputs], folder).exit_code == 0
+    assert (small_filesystem / "c.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_stdout_item_is_written_before_files_are_renamed(tmp_path, monkeypatch):
+    (tmp_path / "a.csv").write_text("old\n")
+
+    def broken(data):
+        raise stipple.outputs.StippleError("cannot write to stdout (Broken pipe)")
+
+    monkeypatch.setattr(stipple.outputs, "write_stdout", broken)
+    with pytest.raises(stipple.outputs.StippleError):
+        stipple.outputs.commit_outputs([(str(tmp_path / "a.csv"), b"new\n"), ("-", b"x")])
+    assert (tmp_path / "a.csv").read_text() == "old\n" and leftovers(tmp_path) == []

@@ -1,0 +1,122 @@
+"""SIGINT / SIGTERM while outputs are written: exit 130 / 143, one line, no temporary file, nothing half-written."""
+
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from safety_helpers import FAST, ROOT, leftovers, make_image, snapshot
+
+# Runs the real CLI in a child process that sends itself SIGNAL right after the N-th fsync (temporary
+# file written) or the N-th rename (N: comma-separated numbers): real signals at the moments that used
+# to leak files.
+CHILD = """
+import os, signal, sys
+from stipple.cli import main
+name, numbers, kind = sys.argv[1], [int(n) for n in sys.argv[2].split(",")], sys.argv[3]
+real = getattr(os, name)
+calls = []
+def hooked(*args):
+    result = real(*args)
+    calls.append(1)
+    if len(calls) in numbers:
+        os.kill(os.getpid(), getattr(signal, kind))
+    return result
+setattr(os, name, hooked)
+sys.argv = ["stipple"] + sys.argv[4:]
+main(prog_name="stipple")
+"""
+
+OUTPUTS = ["-o", "a.csv", "-o", "b.svg", "-o", "c.png"]
+
+
+@pytest.fixture
+def folder(tmp_path):
+    make_image(tmp_path / "in.png")
+    for name in ("a.csv", "b.svg", "c.png"):
+        (tmp_path / name).write_text(f"old {name}\n")
+    return tmp_path
+
+
+def child(folder, hook, numbers, kind, args):
+    return subprocess.run(
+        [sys.executable, "-c", CHILD, hook, str(numbers), kind, *args], cwd=folder, capture_output=True, text=True
+    )
+
+
+@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143)])
+@pytest.mark.parametrize("number", [1, 3])
+def test_signal_while_temporaries_are_written(folder, kind, code, number):
+    before = snapshot(folder)
+    result = child(folder, "fsync", number, kind, ["torus", "in.png", *FAST, *OUTPUTS])
+    assert result.returncode == code, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        f"stipple: stopped by {kind}; outputs are whole or untouched, no temporary file left"
+    ]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
+@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143)])
+def test_signal_during_the_renames_waits_until_all_are_done(folder, kind, code):
+    result = child(folder, "replace", 1, kind, ["torus", "in.png", *FAST, *OUTPUTS])
+    assert result.returncode == code, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    assert all((folder / name).read_bytes() != f"old {name}\n".encode() for name in ("a.csv", "b.svg", "c.png"))
+    assert leftovers(folder) == []
+
+
+@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143)])
+def test_second_signal_while_the_checkpoint_is_written(folder, kind, code):
+    """The first signal (after the second checkpoint) asks the run to stop; the second arrives while the
+    final checkpoint's temporary file is written: it is removed and the second checkpoint stays whole."""
+    args = ["torus", "in.png", *FAST[:4], "--iterations", "50", "-q", "--checkpoint", "run.npz"]
+    before = snapshot(folder)
+    result = child(folder, "fsync", "2,3", kind, [*args, "--checkpoint-every", "1", *OUTPUTS])
+    assert result.returncode == code, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    assert leftovers(folder) == []
+    after = snapshot(folder)
+    assert {name: after[name] for name in before} == before
+    with np.load(folder / "run.npz") as archive:
+        assert int(archive["iteration"]) == 2
+
+
+def test_two_quick_signals_in_a_run_leave_a_whole_checkpoint(folder):
+    image = ROOT / "samples" / "camera128.png"
+    args = [
+        "torus",
+        str(image),
+        "-M",
+        "2000",
+        "-N",
+        "128",
+        "--iterations",
+        "100000",
+        "--tol",
+        "1e-14",
+        "-q",
+        "--checkpoint",
+        "run.npz",
+        "--checkpoint-every",
+        "1",
+        *OUTPUTS,
+    ]
+    before = snapshot(folder)
+    process = subprocess.Popen([sys.executable, "-m", "stipple", *args], cwd=folder, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (folder / "run.npz").exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    process.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    stderr = process.communicate(timeout=60)[1]
+    assert process.returncode == 130, stderr
+    assert len(stderr.strip().splitlines()) == 1 and "Traceback" not in stderr
+    assert leftovers(folder) == []
+    with np.load(folder / "run.npz") as archive:
+        assert archive["points"].shape == (2000, 2)
+    after = snapshot(folder)
+    changed = {name for name in ("a.csv", "b.svg", "c.png") if after[name] != before[name]}
+    assert changed in (set(), {"a.csv", "b.svg", "c.png"})
