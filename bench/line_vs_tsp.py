@@ -27,7 +27,7 @@ LKH_PARAMETERS = "RUNS = 1\nCANDIDATE_SET_TYPE = DELAUNAY\nINITIAL_TOUR_ALGORITH
 LKH_SCALE = 1000.0  # EUC_2D rounds distances to integers: coordinates in 1/1000 pixel
 
 
-def lkh_tour(pixels, trials=20):
+def lkh_tour(pixels, trials=1):
     """A closed LKH-3 tour through ``pixels`` (vertex order)."""
     from elkai import _elkai
 
