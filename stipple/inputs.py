@@ -255,3 +255,32 @@ def read_points_csv(source, names):
     if not np.all(np.isfinite(points)):
         raise StippleError(f"{name}: points contain NaN or infinite values")
     return points
+
+
+def load_colour(source, name=None):
+    """Red, green and blue in [0, 1] of an image file, ``(H, W, 3)``, alpha composited on white paper.
+
+    Gray images give three equal channels; EXIF orientation is applied and Pillow's decompression-bomb guard
+    stays on, as for ``load_density``. ``.npy`` arrays are refused (colour needs an image).
+    """
+    name = name or str(getattr(source, "name", source))
+    data = read_source(source)
+    if not data:
+        raise StippleError(f"{name}: file is empty")
+    if data.startswith(NPY_MAGIC):
+        raise StippleError(f"{name}: colour separation needs an image (PNG, JPEG, ...), not a .npy array")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            image = Image.open(io.BytesIO(data))
+            image.load()
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+        raise StippleError(f"{name}: image is too large (Pillow's decompression-bomb guard)") from None
+    except UnidentifiedImageError:
+        raise StippleError(f"{name}: cannot decode image (not a supported image, or truncated)") from None
+    except (OSError, SyntaxError, ValueError) as error:
+        raise StippleError(f"{name}: cannot decode image ({error})") from None
+    rgba = np.asarray(ImageOps.exif_transpose(image).convert("RGBA"), dtype=np.float64) / 255.0
+    colour = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    check_grid(colour[..., 0], name)
+    return colour

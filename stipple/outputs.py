@@ -497,3 +497,122 @@ def line_output(points, shape, fmt, *, width=(200.0, "mm"), pen_width=None, png_
             pixels, (columns, rows), width, stroke, comment=f"one closed line, {len(pixels)} vertices"
         )
     return png_bytes(render_line(pixels, (columns, rows), png_width or 4 * columns, stroke))
+
+
+# Layered (multi-class) output: one layer per ink, as plotters and vpype expect (one pen per layer).
+
+
+def hex_colour(colour):
+    """``#rrggbb`` of an RGB triple in [0, 1]."""
+    return "#" + "".join(f"{int(round(255 * channel)):02x}" for channel in colour)
+
+
+def layered_csv_bytes(pixels, layer_names):
+    """CSV ``x,y,layer`` with one row per dot; ``layer_names`` holds each dot's layer name."""
+    lines = ["x,y,layer"]
+    lines.extend(f"{x:.6f},{y:.6f},{name}" for (x, y), name in zip(pixels, layer_names, strict=True))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def path_data(path):
+    """SVG path data of a polyline given as complex vertices."""
+    return "M" + " L".join(f"{z.real:.4f},{z.imag:.4f}" for z in path)
+
+
+def layered_svg_bytes(layers, size, physical_width, radius=None, pen_width=None):
+    """SVG with one Inkscape layer (``<g>``) per ``(name, colour, centres, paths)`` in ``layers``.
+
+    Layers without ``paths`` are filled circles of ``radius``; with ``paths`` (pen paths from
+    ``stipple.plotter.dot_paths``) they are stroked polylines ``pen_width`` wide. All in user units of a
+    ``size = (width, height)`` canvas; ``physical_width`` is ``(value, unit)``.
+    """
+    width, height = size
+    value, unit = physical_width
+    parts = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
+        f'width="{value:g}{unit}" height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
+    ]
+    for index, (name, colour, centres, paths) in enumerate(layers, start=1):
+        label = f'id="layer{index}" inkscape:groupmode="layer" inkscape:label="{index}-{name}"'
+        if paths is None:
+            parts.append(f'<g {label} fill="{hex_colour(colour)}" stroke="none">')
+            parts.extend(f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{radius:.4f}"/>' for x, y in centres)
+        else:
+            parts.append(
+                f'<g {label} fill="none" stroke="{hex_colour(colour)}" stroke-width="{pen_width:.4f}" '
+                'stroke-linecap="round" stroke-linejoin="round">'
+            )
+            parts.extend(f'<path d="{path_data(path)}"/>' for path in paths)
+        parts.append("</g>")
+    parts.append("</svg>\n")
+    return "\n".join(parts).encode()
+
+
+def render_layers(layers, size, pixels_wide, radius=None, pen_width=None):
+    """An RGB picture of inks on white paper: each layer's coverage (discs, or its pen paths stroked
+    ``pen_width`` wide) multiplies the paper by the ink's colour, so overlapping cyan and yellow print green."""
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    canvas_size = (int(round(width * scale)), int(round(height * scale)))
+    picture = np.ones((canvas_size[1], canvas_size[0], 3))
+    for _, colour, centres, paths in layers:
+        mask = Image.new("L", canvas_size, 0)
+        draw = ImageDraw.Draw(mask)
+        if paths is None:
+            r = max(radius * scale, 0.5)
+            for x, y in np.asarray(centres) * scale:
+                draw.ellipse((x - r, y - r, x + r, y + r), fill=255)
+        else:
+            stroke = max(int(round(pen_width * scale)), 1)
+            for path in paths:
+                draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
+        coverage = np.asarray(mask, dtype=np.float64)[..., None] / 255.0
+        picture *= 1.0 - coverage * (1.0 - np.asarray(colour))
+    image = Image.fromarray(np.round(picture * 255).astype(np.uint8), "RGB")
+    return image.reduce(SUPERSAMPLE)
+
+
+def layered_torus_output(
+    layers,
+    shape,
+    fmt,
+    *,
+    width=(200.0, "mm"),
+    dot_radius=None,
+    png_width=None,
+    ink=None,
+    dot_style="disc",
+    pen_width=(0.3, "mm"),
+):
+    """Bytes of layered torus dots in ``fmt``; ``layers`` are ``(name, colour, points)`` with points in unit
+    coordinates of an image of ``shape = (H, W)``.
+
+    CSV is ``x,y,layer`` in pixels; SVG one layer per ink; PNG the inks printed on white. The default dot
+    radius makes the dots' ink equal to ``ink`` (the union density's mean; 0.5 if unknown). ``dot_style``
+    "disc" draws filled circles; "circle", "filled" and "point" draw pen paths (``stipple.plotter.dot_paths``)
+    of ``pen_width`` (physical ``(value, unit)``), in the SVG and in the PNG, which is then a plotter preview.
+    """
+    from .plotter import dot_paths
+
+    rows, columns = shape
+    count = sum(len(points) for _, _, points in layers)
+    placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
+    if fmt == ".csv":
+        pixels = np.concatenate([centres for _, _, centres in placed])
+        names = [name for name, _, centres in placed for _ in range(len(centres))]
+        return layered_csv_bytes(pixels, names)
+    if fmt in (".geojson", ".json"):
+        raise StippleError("GeoJSON output is for sphere points")
+    if dot_radius is None:
+        radius = ink_radius((0.5 if ink is None else ink) * rows * columns, count)
+    else:
+        radius = to_user_units(dot_radius, width, columns)
+    pen = to_user_units(pen_width, width, columns)
+    drawn = [
+        (name, colour, centres, None if dot_style == "disc" else dot_paths(centres, radius, dot_style, pen))
+        for name, colour, centres in placed
+    ]
+    if fmt == ".svg":
+        return layered_svg_bytes(drawn, (columns, rows), width, radius, pen)
+    return png_bytes(render_layers(drawn, (columns, rows), png_width or default_png_width(count), radius, pen))

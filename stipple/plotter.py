@@ -74,3 +74,57 @@ def plotter_order(centres):
     """A short visiting order (greedy nearest neighbour improved by 2-opt) and the path lengths before/after."""
     order = two_opt(centres, greedy_order(centres))
     return order, path_length(centres), path_length(centres[order])
+
+
+DOT_STYLES = ("circle", "filled", "point")
+SEGMENTS_PER_TURN = 24
+
+
+def circle_path(centre, radius, segments=SEGMENTS_PER_TURN):
+    """A closed polygon of ``segments`` sides around ``centre`` (complex ``x + iy``), as complex vertices."""
+    angles = np.linspace(0, 2 * np.pi, segments + 1)
+    return centre + radius * np.exp(1j * angles)
+
+
+def spiral_path(centre, radius, pen_width, segments=SEGMENTS_PER_TURN):
+    """One pen-down path that fills a disc: an Archimedean spiral of pitch ``pen_width`` out to the
+    outermost stroke's radius ``radius - pen_width / 2``, then a full circle there (the disc's edge)."""
+    outer = max(radius - pen_width / 2, 0.0)
+    turns = outer / pen_width
+    if turns <= 0.5:
+        return circle_path(centre, outer, segments) if outer > 0 else np.array([centre, centre + pen_width / 10])
+    end = 2 * np.pi * turns
+    angles = np.linspace(0, end, max(int(np.ceil(segments * turns)), 2) + 1)
+    spiral = centre + outer * (angles / end) * np.exp(1j * angles)
+    edge = centre + outer * np.exp(1j * (end + np.linspace(0, 2 * np.pi, segments + 1)[1:]))
+    return np.concatenate([spiral, edge])
+
+
+def dot_paths(centres, radius, style="circle", pen_width=0.3):
+    """Pen paths (complex vertex arrays, vpype's line format) that draw a dot of ``radius`` at each centre.
+
+    Parameters
+    ----------
+    centres : numpy.ndarray
+        ``(M, 2)`` dot centres in drawing units.
+    radius : float
+        Dot radius in the same units.
+    style : {"circle", "filled", "point"}
+        "circle": the dot's outline (the pen's centre on ``radius - pen_width / 2``); "filled": a spiral that
+        inks the whole disc with strokes ``pen_width`` apart; "point": a stroke a tenth of the pen wide, which
+        the pen draws as a dot of its own width (plotters skip zero-length paths).
+    pen_width : float
+        Width of the pen's stroke, same units.
+
+    Returns
+    -------
+    list of numpy.ndarray
+    """
+    if style not in DOT_STYLES:
+        raise ValueError(f"dot style must be one of {', '.join(DOT_STYLES)}, not {style!r}")
+    positions = np.asarray(centres, dtype=np.float64) @ np.array([1.0, 1j])
+    if style == "point":
+        return [np.array([z, z + pen_width / 10]) for z in positions]
+    if style == "circle":
+        return [circle_path(z, max(radius - pen_width / 2, pen_width / 20)) for z in positions]
+    return [spiral_path(z, radius, pen_width) for z in positions]

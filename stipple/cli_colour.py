@@ -1,0 +1,132 @@
+"""``stipple colour``: one class of dots per ink of a colour image, optimised jointly (registered in ``cli``)."""
+
+import time
+
+import click
+
+from .cli import (
+    common_options,
+    finish,
+    guarded_files,
+    physical_centres,
+    plot_order,
+    render_settings,
+    solve,
+    write_outputs,
+)
+from .colour import SEPARATIONS
+from .errors import StippleError
+from .outputs import output_format, parse_length
+from .plotter import DOT_STYLES
+from .transforms import BACKENDS
+
+
+@click.command()
+@click.argument("image", required=False)
+@common_options
+@click.option(
+    "--separation",
+    type=click.Choice(SEPARATIONS),
+    default="cmyk",
+    show_default=True,
+    help="Inks: cyan, magenta, yellow and black; no black; or one black ink (1 - luminance).",
+)
+@click.option(
+    "--black",
+    type=click.FloatRange(0, 1),
+    default=1.0,
+    show_default=True,
+    help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
+)
+@click.option(
+    "--union-weight",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
+)
+@click.option(
+    "--dot-style",
+    type=click.Choice(("disc",) + DOT_STYLES),
+    default="disc",
+    show_default=True,
+    help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
+    "previews the pen strokes.",
+)
+@click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width for the pen-path styles.")
+@click.option("--init", type=click.Choice(("density", "uniform")), default="density", show_default=True)
+@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
+@click.pass_context
+def colour(ctx, image, **options):
+    """Stipple a colour IMAGE with one layer of dots per ink (CSV x,y,layer; SVG one layer per pen)."""
+    from .cli import resolve_input
+    from .colour import colour_problem
+    from .inputs import load_colour
+    from .outputs import layered_torus_output
+    from .torus import DEFAULT_EPSILON
+
+    started = time.perf_counter()
+    image = resolve_input(ctx, image)
+    if image is None:
+        raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    try:
+        check_colour_options(options)
+        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        pen_width = parse_length(options["pen_width"])
+        with guarded_files([("image", image)], options["outputs"], options["checkpoint"]):
+            rgb = load_colour(image)
+            check_png(options, rgb.shape[1::-1])
+            layers, problem = colour_problem(
+                rgb,
+                options["n_points"],
+                options["bandwidth"],
+                separation=options["separation"],
+                black=options["black"],
+                union_weight=options["union_weight"],
+                backend=options["backend"],
+                threads=options["threads"],
+                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+                hessian=options["hessian"],
+                near_field=options["near_field"] is not False,
+            )
+            result, stopped_by = solve(problem, options, options["init"])
+            shape = rgb.shape[:2]
+            placed = [
+                (layer.name, layer.colour, ordered(result.points[part], shape, settings, options))
+                for layer, part in zip(layers, problem.slices, strict=True)
+            ]
+            ink = sum(layer.density for layer in layers).mean()
+            write_outputs(
+                options["outputs"],
+                lambda fmt: layered_torus_output(
+                    placed, shape, fmt, ink=ink, dot_style=options["dot_style"], pen_width=pen_width, **settings
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)
+
+
+def check_colour_options(options):
+    """Options of the shared set that have no meaning for colour separation are refused, not ignored."""
+    if options["invert"] or options["value_range"] is not None:
+        raise StippleError("--invert and --range are for gray images and maps, not colour separation")
+    if options["gamma"] != 1.0:
+        raise StippleError("--gamma is for gray images and maps, not colour separation")
+
+
+def check_png(options, canvas):
+    """Refuse, before the run, a PNG output too large to draw: the inks' picture holds about 33 bytes a pixel."""
+    from .outputs import check_png_canvas, default_png_width
+
+    if ".png" in [output_format(path) for path in options["outputs"]]:
+        check_png_canvas(canvas, options["png_width"] or default_png_width(options["n_points"]), layers=33)
+
+
+def ordered(points, shape, settings, options):
+    """One layer's points, along a short pen path when ``--order`` is given (each pen draws its own layer)."""
+    if len(points) < 2:
+        return points
+    centres = physical_centres(points, shape, settings["width"])
+    return plot_order(centres, points, options, settings["width"][1])

@@ -1,0 +1,235 @@
+"""Multi-class halftoning: every class of dots and their union reproduce their own densities at once.
+
+For classes ``c`` with densities ``w_c`` and dots ``p[s_c]`` (index slices of one ``(M, 2)`` array) the joint
+objective is
+
+    E(p) = sum_c a_c E(p[s_c]; w_c) + a_u E(p; sum_c w_c)
+
+(Wei 2010, *Multi-class blue noise sampling*; Schmaltz et al. 2012 for the electrostatic form): each colour is
+a blue-noise stipple of its ink, and so are all dots together, so dots of different colours avoid each other
+too. Each term is a torus problem's own objective (discrepancy with its near field) on its subset; the one CG
+drives the sum like any other objective.
+"""
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import StippleError
+from .halftone import Problem, check_bandwidth, run
+from .torus import DEFAULT_EPSILON, check_weights, default_bandwidth, torus_problem
+
+
+def class_counts(masses, total):
+    """Dots per class in proportion to the masses, rounded by largest remainder (Hamilton's method).
+
+    Every count is the quota ``total * mass / sum(masses)`` rounded down or up, and the counts add up to
+    ``total``; the remainders are handed out largest first (ties to the earlier class).
+
+    Parameters
+    ----------
+    masses : sequence of float
+        Non-negative masses, at least one positive.
+    total : int
+        Number of dots to share out.
+
+    Returns
+    -------
+    numpy.ndarray
+        Integer counts, one per class.
+    """
+    masses = np.asarray(masses, dtype=np.float64)
+    if masses.ndim != 1 or np.any(masses < 0) or not masses.sum() > 0 or not np.all(np.isfinite(masses)):
+        raise StippleError("class masses must be finite, non-negative and not all zero")
+    quotas = total * masses / masses.sum()
+    counts = np.floor(quotas).astype(int)
+    remainders = quotas - counts
+    order = np.argsort(-remainders, kind="stable")
+    counts[order[: total - counts.sum()]] += 1
+    return counts
+
+
+class MulticlassObjective:
+    """``sum_t a_t E_t(p[s_t])``: objectives on index slices of one point array, weighted.
+
+    Parameters
+    ----------
+    terms : sequence of objects
+        Objectives (``set_points``, ``energy``, ``gradient``, ``hessian_gram``, ``hessian_vectors``).
+    slices : sequence of slice
+        The points each term sees (``slice(None)`` for all of them).
+    weights : sequence of float
+        The factors ``a_t``.
+    """
+
+    def __init__(self, terms, slices, weights):
+        if not len(terms) == len(slices) == len(weights):
+            raise ValueError("terms, slices and weights must have the same length")
+        self.terms = list(terms)
+        self.slices = list(slices)
+        self.weights = [float(weight) for weight in weights]
+        self._shape = None
+
+    def set_points(self, points):
+        """Move every term with a non-zero factor to its points."""
+        self._shape = points.shape
+        for term, part, _ in self._weighted():
+            term.set_points(points[part])
+
+    def energy(self):
+        return float(sum(weight * term.energy() for term, _, weight in self._weighted()))
+
+    def gradient(self):
+        total = np.zeros(self._shape)
+        for term, part, weight in self._weighted():
+            total[part] += weight * term.gradient()
+        return total
+
+    def hessian_gram(self, vectors):
+        return sum(weight * term.hessian_gram([v[part] for v in vectors]) for term, part, weight in self._weighted())
+
+    def hessian_vectors(self, vectors):
+        products = [np.zeros(self._shape) for _ in vectors]
+        for term, part, weight in self._weighted():
+            for product, value in zip(products, term.hessian_vectors([v[part] for v in vectors]), strict=True):
+                product[part] += weight * value
+        return products
+
+    def _weighted(self):
+        return [item for item in zip(self.terms, self.slices, self.weights, strict=True) if item[2] != 0]
+
+
+@dataclass
+class MulticlassProblem(Problem):
+    """A ``Problem`` whose points are classes one after another; ``classes`` are each class's own problem.
+
+    ``discrepancy`` is the union's (``stipple.evaluate`` measures the union on this problem, and a class
+    ``c`` on ``classes[c]`` with the points ``points[slices[c]]``).
+    """
+
+    names: list = field(default_factory=list)
+    classes: list = field(default_factory=list)
+    slices: list = field(default_factory=list)
+
+
+def class_slices(counts):
+    """Consecutive slices of a point array holding ``counts[c]`` points of class ``c``."""
+    ends = np.cumsum(counts)
+    return [slice(int(end - count), int(end)) for count, end in zip(counts, ends, strict=True)]
+
+
+def class_bandwidth(bandwidth, class_points, n_points):
+    """A class's bandwidth for a union bandwidth ``N``: ``N sqrt(M_c / M)`` (even), as the default rule scales."""
+    return max(2, int(2 * round(bandwidth * np.sqrt(class_points / n_points) / 2)))
+
+
+def multiclass_problem(
+    densities,
+    n_points,
+    bandwidth=None,
+    *,
+    names=None,
+    term_weights=None,
+    backend="ducc0",
+    threads=None,
+    epsilon=DEFAULT_EPSILON,
+    hessian="gauss-newton",
+    near_field=True,
+):
+    """The joint problem of several densities on one image with ``n_points`` dots in all.
+
+    Parameters
+    ----------
+    densities : sequence of numpy.ndarray
+        One density ``w_c >= 0`` per class, all of the same ``(H, W)`` shape, rows top to bottom.
+    n_points : int
+        Total number of dots M; class ``c`` gets ``M_c`` of them in proportion to its mass
+        (``class_counts``). Classes that get no dot are left out.
+    bandwidth : int, optional
+        The union's bandwidth (default ``default_bandwidth(M, sum w_c)``); class ``c`` gets its own default
+        ``default_bandwidth(M_c, w_c)``, or ``N sqrt(M_c / M)`` when ``bandwidth`` is given.
+    names : sequence of str, optional
+        Class names (default ``class0``, ``class1``, ...).
+    term_weights : sequence of float, optional
+        Factors ``a_c`` of the class terms and, last, ``a_u`` of the union term (default all 1).
+    backend, threads, epsilon, hessian, near_field :
+        As for ``stipple.torus.torus_problem``, for every term.
+
+    Returns
+    -------
+    MulticlassProblem
+    """
+    densities = [check_weights(weights) for weights in densities]
+    if not densities or any(weights.shape != densities[0].shape for weights in densities):
+        raise StippleError("class densities must be one or more arrays of the same shape")
+    names = [f"class{index}" for index in range(len(densities))] if names is None else list(names)
+    term_weights = [1.0] * (len(densities) + 1) if term_weights is None else [float(a) for a in term_weights]
+    if len(names) != len(densities) or len(term_weights) != len(densities) + 1:
+        raise StippleError("give one name per class and one term weight per class plus one for the union")
+    if not all(np.isfinite(a) and a >= 0 for a in term_weights) or not any(term_weights):
+        raise StippleError(f"term weights must be finite, non-negative and not all zero, not {term_weights}")
+    counts = class_counts([weights.sum() for weights in densities], n_points)
+    kept = [index for index, count in enumerate(counts) if count > 0]
+    options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
+    union = torus_problem(sum(densities), n_points, bandwidth, **options)
+    classes = []
+    for index in kept:
+        class_band = (
+            default_bandwidth(int(counts[index]), densities[index])
+            if bandwidth is None
+            else class_bandwidth(check_bandwidth(bandwidth), counts[index], n_points)
+        )
+        classes.append(torus_problem(densities[index], int(counts[index]), class_band, **options))
+    slices = class_slices(counts[kept])
+    weights = [term_weights[index] for index in kept] + [term_weights[-1]]
+    terms = [part.objective for part in classes] + [union.objective]
+    objective = MulticlassObjective(terms, [*slices, slice(None)], weights)
+    return MulticlassProblem(
+        domain="torus",
+        manifold=union.manifold,
+        objective=objective,
+        discrepancy=union.discrepancy,
+        n_points=union.n_points,
+        bandwidth=union.bandwidth,
+        sample=lambda rng, count: _sample_classes(classes, rng, count),
+        settings={
+            **union.settings,
+            "classes": [names[index] for index in kept],
+            "class_points": [part.n_points for part in classes],
+            "class_bandwidths": [part.bandwidth for part in classes],
+            "term_weights": weights,
+            "class_fingerprint": _fingerprint(classes),
+        },
+        names=[names[index] for index in kept],
+        classes=classes,
+        slices=slices,
+    )
+
+
+def _sample_classes(classes, rng, count):
+    """``count`` i.i.d. points, each class's share (by its count) from its own density, classes in order."""
+    shares = class_counts([part.n_points for part in classes], count)
+    return np.concatenate([part.sample(rng, int(share)) for part, share in zip(classes, shares, strict=True)])
+
+
+def _fingerprint(classes):
+    """SHA-256 of the classes' exact Fourier coefficients (the checkpoint's own fingerprint covers the union)."""
+    digest = hashlib.sha256()
+    for part in classes:
+        digest.update(np.ascontiguousarray(part.discrepancy.target).tobytes())
+    return digest.hexdigest()
+
+
+def halftone_classes(densities, n_points, bandwidth=None, *, names=None, term_weights=None, **options):
+    """Joint halftone of several densities: ``(problem, result)``; class ``c`` is ``result.points[slices[c]]``.
+
+    ``options`` are ``multiclass_problem``'s (``backend``, ``threads``, ``epsilon``, ``hessian``,
+    ``near_field``) and ``stipple.halftone.run``'s (``init``, ``seed``, ``tol``, ``iterations``, ...).
+    """
+    problem_keys = ("backend", "threads", "epsilon", "hessian", "near_field")
+    problem_options = {key: options.pop(key) for key in problem_keys if key in options}
+    problem = multiclass_problem(
+        densities, n_points, bandwidth, names=names, term_weights=term_weights, **problem_options
+    )
+    return problem, run(problem, **options)

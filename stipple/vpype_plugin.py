@@ -1,0 +1,68 @@
+"""vpype plug-in: ``vpype stipple IMAGE ... write out.svg`` puts one layer of pen paths per ink in the document.
+
+Installed with ``pip install 'stipple[plotter]'`` (vpype registers it through the ``vpype.plugins`` entry
+point). Lengths follow vpype's conventions (``200mm``, ``8in``; bare numbers are CSS pixels); layers get the
+ink's name, colour and the pen width, so ``vpype ... write`` and the AxiDraw software see one pen per layer.
+"""
+
+import click
+import numpy as np
+import vpype as vp
+import vpype_cli
+
+from .colour import SEPARATIONS, halftone_colour
+from .errors import StippleError
+from .plotter import DOT_STYLES, dot_paths
+
+
+def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
+    """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
+
+    ``options`` go to ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone:
+    the dots of all inks together cover the union density's mean share of the page.
+    """
+    layers, problem, result = halftone_colour(image, n_points, separation=separation, **options)
+    rows, columns = layers[0].density.shape
+    scale = width / columns
+    if dot_radius is None:
+        ink = sum(layer.density for layer in layers).mean()
+        dot_radius = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
+    drawn = []
+    for layer, part in zip(layers, problem.slices, strict=True):
+        centres = result.points[part] * np.array([columns, rows]) * scale
+        drawn.append((layer.name, layer.colour, dot_paths(centres, dot_radius, dot_style, pen_width)))
+    return drawn, rows * scale
+
+
+@click.command("stipple")
+@click.argument("image", type=click.Path(exists=True, dir_okay=False))
+@click.option("-M", "--points", "n_points", type=vpype_cli.IntegerType(), default=10000, show_default=True)
+@click.option("--separation", type=click.Choice(SEPARATIONS), default="gray", show_default=True, help="Inks.")
+@click.option("--black", type=click.FloatRange(0, 1), default=1.0, show_default=True, help="Grey into black (cmyk).")
+@click.option("--union-weight", type=float, default=1.0, show_default=True, help="Weight of the all-dots term.")
+@click.option("-w", "--width", type=vpype_cli.LengthType(), default="200mm", show_default=True, help="Image width.")
+@click.option("--dot-style", type=click.Choice(DOT_STYLES), default="circle", show_default=True)
+@click.option("--pen-width", type=vpype_cli.LengthType(), default="0.3mm", show_default=True)
+@click.option("--dot-radius", type=vpype_cli.LengthType(), default=None, help="Default: keeps the image's tone.")
+@click.option("--iterations", type=vpype_cli.IntegerType(), default=2000, show_default=True)
+@click.option("--tol", type=float, default=1e-4, show_default=True)
+@click.option("--seed", type=vpype_cli.IntegerType(), default=0, show_default=True)
+@vpype_cli.global_processor
+def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
+    """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
+    try:
+        drawn, height = ink_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    for name, colour, paths in drawn:
+        layer_id = document.free_id()
+        document.add(vp.LineCollection(paths), layer_id)
+        layer = document.layers[layer_id]
+        layer.set_property(vp.METADATA_FIELD_NAME, name)
+        layer.set_property(vp.METADATA_FIELD_COLOR, vp.Color(*(int(round(255 * c)) for c in colour)))
+        layer.set_property(vp.METADATA_FIELD_PEN_WIDTH, pen_width)
+    document.extend_page_size((width, height))
+    return document
+
+
+stipple.help_group = "Plugins"

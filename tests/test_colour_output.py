@@ -1,0 +1,98 @@
+"""``stipple colour`` and the pen paths for plotters: layers per ink, counts by largest remainder, ink
+coverage of the filled dot style, and the vpype plug-in (skipped when vpype is not installed)."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+from stipple.colour import separate
+from stipple.multiclass import class_counts
+from stipple.plotter import SEGMENTS_PER_TURN, dot_paths
+
+
+@pytest.fixture
+def colour_image(tmp_path):
+    """Left half red (magenta, yellow and a little black), right half a grey teal (cyan and black): four inks."""
+    pixels = np.zeros((12, 16, 3), dtype=np.uint8)
+    pixels[:, :8] = (230, 40, 40)
+    pixels[:, 8:] = (40, 110, 110)
+    path = tmp_path / "flag.png"
+    Image.fromarray(pixels).save(path)
+    return path, pixels / 255.0
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_colour_writes_one_layer_per_ink_with_counts_by_mass(colour_image, tmp_path):
+    path, rgb = colour_image
+    outputs = [tmp_path / name for name in ("dots.csv", "dots.svg", "dots.png")]
+    args = ["colour", path, "-M", 300, "--iterations", 15, "-q"]
+    result = run(args + [item for output in outputs for item in ("-o", output)])
+    assert result.exit_code == 0, result.output
+    rows = [line.split(",") for line in outputs[0].read_text().splitlines()]
+    assert rows[0] == ["x", "y", "layer"] and len(rows) == 301
+    layers = separate(rgb, "cmyk")
+    expected = class_counts([layer.density.sum() for layer in layers], 300)
+    found = [sum(row[2] == layer.name for row in rows[1:]) for layer in layers]
+    assert found == expected.tolist() and min(found) > 0
+    # Magenta and yellow dots lie on the red half, cyan on the blue-grey half.
+    x = {layer.name: np.array([float(row[0]) for row in rows[1:] if row[2] == layer.name]) for layer in layers}
+    assert np.all(x["magenta"] < 8) and np.all(x["yellow"] < 8) and np.mean(x["cyan"] >= 8) > 0.9
+    svg = outputs[1].read_text()
+    assert svg.count('inkscape:groupmode="layer"') == 4 and svg.count("<circle") == 300
+    assert 'fill="#ff00ff"' in svg and 'inkscape:label="4-black"' in svg
+    picture = np.asarray(Image.open(outputs[2]).convert("RGB"), dtype=float)
+    left, right = picture[:, : picture.shape[1] // 2], picture[:, picture.shape[1] // 2 :]
+    assert left[..., 0].mean() > left[..., 1].mean() + 40  # red on the left
+    assert right[..., 2].mean() > right[..., 0].mean() + 20  # teal on the right
+
+
+def test_colour_refuses_gray_only_options(colour_image):
+    result = run(["colour", colour_image[0], "-M", 50, "--invert", "-q"])
+    assert result.exit_code == 1 and "not colour separation" in result.output
+
+
+def test_filled_dots_ink_the_whole_disc_and_stay_inside():
+    radius, pen = 1.0, 0.13
+    (path,) = dot_paths(np.array([[3.0, 4.0]]), radius, "filled", pen)
+    centre = 3 + 4j
+    assert np.abs(path - centre).max() <= radius - pen / 2 + 1e-12
+    starts, ends = path[:-1], path[1:]
+    grid = np.linspace(-radius, radius, 81)
+    probes = centre + (grid[:, None] + 1j * grid[None, :]).ravel()
+    probes = probes[np.abs(probes - centre) <= radius - 1e-9]
+    # Distance from each probe to the polyline: the pen (half width pen/2) must reach every point of the disc.
+    along = np.clip(((probes[:, None] - starts) * np.conj(ends - starts)).real / np.abs(ends - starts) ** 2, 0, 1)
+    distance = np.abs(probes[:, None] - (starts + along * (ends - starts))).min(axis=1)
+    sagitta = (radius - pen / 2) * (1 - np.cos(np.pi / SEGMENTS_PER_TURN))  # the polygon's chord error
+    assert distance.max() <= pen / 2 + sagitta + 1e-12
+    (circle,) = dot_paths(np.array([[0.0, 0.0]]), radius, "circle", pen)
+    np.testing.assert_allclose(np.abs(circle), radius - pen / 2)
+    (point,) = dot_paths(np.array([[0.0, 0.0]]), radius, "point", pen)
+    assert np.abs(point[1] - point[0]) == pytest.approx(pen / 10)
+
+
+def test_vpype_plugin_adds_one_named_coloured_layer_per_ink(colour_image):
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    document = vpype_cli.execute(
+        f"stipple -M 200 --separation cmyk --iterations 10 --dot-style filled --width 160mm --pen-width 0.5mm "
+        f"{colour_image[0]}"
+    )
+    layers = document.layers
+    assert len(layers) == 4
+    names = [layer.property(vpype.METADATA_FIELD_NAME) for layer in layers.values()]
+    assert names == ["cyan", "magenta", "yellow", "black"]
+    assert sum(len(layer) for layer in layers.values()) == 200
+    pen = vpype.convert_length("0.5mm")
+    assert all(layer.property(vpype.METADATA_FIELD_PEN_WIDTH) == pytest.approx(pen) for layer in layers.values())
+    assert layers[2].property(vpype.METADATA_FIELD_COLOR) == vpype.Color(255, 0, 255)
+    width = vpype.convert_length("160mm")
+    assert document.page_size == pytest.approx((width, width * 12 / 16))
+    centres = np.array([path.mean() for layer in layers.values() for path in layer])
+    assert np.all((centres.real >= 0) & (centres.real <= width) & (centres.imag >= 0) & (centres.imag <= width * 0.75))
