@@ -452,6 +452,83 @@ def torus(ctx, image, **options):
     finish(result, stopped_by, options, started)
 
 
+@main.command()
+@click.argument("image", required=False)
+@common_options
+@click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.5 sqrt(M W H)).")
+@click.option("--pen-width", default=None, help="Stroke width in SVG/PNG, e.g. 0.3mm (default: one input pixel).")
+@click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
+@click.pass_context
+def line(ctx, image, **options):
+    """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
+    from .line import line_points
+    from .outputs import line_output
+
+    started = time.perf_counter()
+    image = resolve_input(ctx, image)
+    if image is None:
+        raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    try:
+        width = parse_length(options["width"])
+        pen_width = None if options["pen_width"] is None else parse_length(options["pen_width"])
+        inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
+        with guarded_files(inputs, options["outputs"], options["checkpoint"]):
+            weights = load_input(
+                image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+            )
+            init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
+            result, stopped_by = solve_line(weights, options, init)
+            points = line_points(result.points)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: line_output(
+                    points, weights.shape, fmt, width=width, pen_width=pen_width, png_width=options["png_width"]
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)
+
+
+def solve_line(weights, options, init):
+    """``draw_line`` with the CLI's stopping, checkpoint, progress and signal options."""
+    from .line import draw_line
+
+    seconds, iterations = parse_every(options["checkpoint_every"])
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
+    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
+    with SIGNALS.deferred() as interruption:
+        try:
+            result = draw_line(
+                weights,
+                options["n_points"],
+                options["length"],
+                options["bandwidth"],
+                seed=options["seed"],
+                init=init,
+                tol=options["tol"],
+                iterations=options["iterations"],
+                time_limit=options["time_limit"],
+                callback=lambda state: progress(state) or interruption.stop_requested(state),
+                checkpoint=options["checkpoint"],
+                checkpoint_seconds=seconds,
+                checkpoint_iterations=iterations,
+                resume=options["resume"],
+                threads=options["threads"],
+                epsilon=options["epsilon"] or 1e-9,
+            )
+        finally:
+            progress.close()
+    if options["verbose"] and not options["quiet"]:
+        segments = result.segment_lengths
+        click.echo(
+            f"stipple: line N={result.bandwidth}, length {segments.sum():.1f} px, penalty {result.penalty:g}, "
+            f"max/mean segment {segments.max() / segments.mean():.4f}",
+            err=True,
+        )
+    return result, interruption.signal
+
+
 def read_torus_init(init, shape):
     """``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
     if init in ("density", "uniform"):
@@ -745,8 +822,20 @@ def torus_canvas(pixels, like, size):
 @click.option("--range", "value_range", type=(float, float), default=None, help="As for the run.")
 @click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
 @click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
+@click.option("--line", "as_line", is_flag=True, help="POINTS are the vertices of one closed line (stipple line).")
 def evaluate(
-    points_source, input_source, bandwidth, uniform, kernel, lon0, invert, gamma, value_range, json_path, spectrum_path
+    points_source,
+    input_source,
+    bandwidth,
+    uniform,
+    kernel,
+    lon0,
+    invert,
+    gamma,
+    value_range,
+    json_path,
+    spectrum_path,
+    as_line,
 ):
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform)."""
     import json
@@ -766,9 +855,12 @@ def evaluate(
             domain, points = read_points(points_source)
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
-            if spectrum_path is not None and domain != "torus":
+            if spectrum_path is not None and (domain != "torus" or as_line):
                 raise StippleError("--spectrum is for torus points only")
-            report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
+            if as_line:
+                report = evaluate_line_points(points, domain, input_source, bandwidth, options)
+            else:
+                report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
             files = []
             if spectrum_path is not None:
                 spectrum = report["spectrum"]
@@ -781,6 +873,20 @@ def evaluate(
             commit_outputs(files)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+
+
+def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
+    """The report of ``stipple evaluate --line``: E_N of the vertices, length, segments, the drawn line's PSNR."""
+    from .evaluate import evaluate_line
+    from .line import closed_length, line_problem
+
+    if domain != "torus" or input_source is None:
+        raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
+    weights = load_input(
+        input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+    )
+    problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
+    return evaluate_line(problem, pixels / np.array([weights.shape[1], weights.shape[0]]), weights)
 
 
 def check_extension(option, path, extension):
@@ -823,13 +929,14 @@ def format_report(report):
         f"untruncated energy (with the near field): {report['untruncated_energy']:.6e}",
     ]
     for item in report.get("similarity", []):
-        lines.append(
-            f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f} "
-            f"(dots binned into pixels first: PSNR {item['psnr_binned']:.2f} dB)"
-        )
+        binned = f" (dots binned into pixels first: PSNR {item['psnr_binned']:.2f} dB)" if "psnr_binned" in item else ""
+        lines.append(f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f}{binned}")
     if "neighbour_distance_over_hexagonal" in report:
         stats = report["neighbour_distance_over_hexagonal"]
         lines.append("nearest neighbour / hexagonal spacing: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+    for key in ("length_pixels", "max_over_mean_segment", "min_over_mean_segment"):
+        if key in report:
+            lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
     for key in ("max_coefficient_error", "minimum_separation_degrees", "cap_discrepancy"):
         if key in report:
             lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")

@@ -359,3 +359,59 @@ def evaluate_sphere(problem, points, density):
         "cap_discrepancy": cap_discrepancy(points, *cells.centres_and_masses()),
         **sphere_clumps(points, density),
     }
+
+
+# One-line drawings: the drawn line's ink against the image.
+
+
+def line_ink(pixels, shape, pen_width=1.0, closed=True):
+    """Ink (0 white .. 1 black) of a polyline through ``pixels`` drawn ``pen_width`` pixels wide, per pixel."""
+    from .outputs import render_line
+
+    rows, columns = shape
+    image = render_line(pixels, (columns, rows), columns, pen_width, closed=closed)
+    return 1 - np.asarray(image, dtype=np.float64) / 255
+
+
+def fitted_similarity(weights, ink, blurs=(2.0, 4.0)):
+    """PSNR and SSIM of blurred ``ink`` scaled by least squares onto the blurred density, per blur (pixels).
+
+    The scale ``a = <B w, B ink> / <B ink, B ink>`` makes the comparison blind to the tone scale of the pen.
+    """
+    results = []
+    for sigma in blurs:
+        reference, drawn = periodic_blur(weights, sigma), periodic_blur(ink, sigma)
+        scale = float(np.sum(reference * drawn) / max(np.sum(drawn * drawn), 1e-300))
+        fitted = scale * drawn
+        results.append({"sigma": sigma, "psnr": psnr(reference, fitted), "ssim": ssim(reference, fitted), "ink": scale})
+    return results
+
+
+def curve_energy(problem, points):
+    """The line objective without its speed penalty: the discrepancy with the curve's near field."""
+    discrepancy, near = problem.objective.terms[:2]
+    for term in (discrepancy, near):
+        term.set_points(points)
+    return discrepancy.energy() + near.energy()
+
+
+def evaluate_line(problem, points, weights, pen_width=1.0):
+    """``E_N`` of the curve's vertex measure, the segment statistics, and the drawn line against the image."""
+    rows, columns = weights.shape
+    pixels = points * np.array([columns, rows])
+    segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
+    energy = discrepancy_energy(problem, points)
+    expected = expected_iid_energy(problem)
+    return {
+        "domain": "line",
+        "points": len(points),
+        "bandwidth": problem.bandwidth,
+        "energy": energy,
+        "expected_iid_energy": expected,
+        "energy_ratio_to_iid": energy / expected,
+        "untruncated_energy": curve_energy(problem, points),
+        "length_pixels": float(segments.sum()),
+        "max_over_mean_segment": float(segments.max() / segments.mean()),
+        "min_over_mean_segment": float(segments.min() / segments.mean()),
+        "similarity": fitted_similarity(weights, line_ink(pixels, weights.shape, pen_width)),
+    }

@@ -87,15 +87,18 @@ class NearField:
         tangential curvatures of each pair, so that the Newton step of CG stays a descent step.
     skin : float
         Verlet-list margin as a fraction of the radius.
+    exclude : callable, optional
+        ``exclude(first, second) -> bool array``: index pairs left out of the sum (e.g. neighbours along a curve).
     """
 
-    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3):
+    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3, exclude=None):
         self.kernel = kernel
         self.geometry = geometry
         self.pair_factor = 2 * weight**2 * factor
         self.self_energy_per_point = weight**2 * factor * float(kernel.values(np.zeros(1))[0][0])
         self.hessian = hessian
         self.skin = skin
+        self.exclude = exclude
         self._reference = None
         self.counts = {"pair_searches": 0}
 
@@ -108,6 +111,9 @@ class NearField:
         positions = self.geometry.positions(points)
         self._update_candidates(positions)
         first, second = self._candidates
+        if self.exclude is not None:
+            kept = ~self.exclude(first, second)
+            first, second = first[kept], second[kept]
         columns = np.ascontiguousarray(positions.T)
         delta = [self.geometry.wrap(column[first] - column[second], axis) for axis, column in enumerate(columns)]
         distance = np.sqrt(sum(component * component for component in delta))

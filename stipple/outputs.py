@@ -442,6 +442,64 @@ def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
     return png_bytes(image)
 
 
+# One-line drawings (``stipple line``): a closed polyline in pixel units of the input image.
+
+
+def render_line(pixels, size, pixels_wide, pen_width, closed=True):
+    """An antialiased grayscale image of a black polyline of ``pen_width`` (user units) on white.
+
+    ``pixels`` are the vertices in user units of a canvas of ``size = (width, height)``; drawn at 4× and reduced.
+    """
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    canvas = Image.new("L", (int(round(width * scale)), int(round(height * scale))), 255)
+    vertices = np.asarray(pixels) * scale
+    if closed:
+        vertices = np.vstack([vertices, vertices[:1]])
+    stroke = max(int(round(pen_width * scale)), 1)
+    ImageDraw.Draw(canvas).line([tuple(v) for v in vertices], fill=0, width=stroke, joint="curve")
+    return canvas.reduce(SUPERSAMPLE)
+
+
+def line_svg_bytes(pixels, size, physical_width, pen_width, comment=""):
+    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide, unfilled."""
+    width, height = size
+    value, unit = physical_width
+    points = " ".join(f"{x:.3f},{y:.3f}" for x, y in pixels)
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{value:g}{unit}" '
+            f'height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
+            f"<!-- {comment} -->" if comment else "",
+            f'<path fill="none" stroke="black" stroke-width="{pen_width:.4f}" stroke-linejoin="round" '
+            f'd="M {points} Z"/>',
+            "</svg>\n",
+        ]
+    ).encode()
+
+
+def line_output(points, shape, fmt, *, width=(200.0, "mm"), pen_width=None, png_width=None):
+    """Bytes of a closed curve (vertices in unit coordinates, path order) in ``fmt``.
+
+    CSV is ``x,y`` in pixel units in path order (the closing segment from the last vertex back to the first is
+    implied); SVG one closed ``<path>`` of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``,
+    default one input pixel); PNG the same line, ``png_width`` pixels wide (default: the input's width × 4).
+    """
+    rows, columns = shape
+    pixels = np.asarray(points) * np.array([columns, rows])
+    if fmt == ".csv":
+        return csv_bytes([pixels[:, 0], pixels[:, 1]], ["x", "y"])
+    if fmt in (".geojson", ".json"):
+        raise StippleError("GeoJSON output is for sphere points")
+    stroke = 1.0 if pen_width is None else to_user_units(pen_width, width, columns)
+    if fmt == ".svg":
+        return line_svg_bytes(
+            pixels, (columns, rows), width, stroke, comment=f"one closed line, {len(pixels)} vertices"
+        )
+    return png_bytes(render_line(pixels, (columns, rows), png_width or 4 * columns, stroke))
+
+
 # Layered (multi-class) output: one layer per ink, as plotters and vpype expect (one pen per layer).
 
 

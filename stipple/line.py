@@ -1,0 +1,426 @@
+"""One-line drawings: a closed polygon whose arclength measure minimises the discrepancy to an image.
+
+The curve-based approximation of Ehler, Gräf, Neumayer and Steidl (Found. Comput. Math. 2021): vertices
+``p_1..p_M`` of a closed polygon, equally spaced along it, carry the equal-weight quadrature ``lam sum_i f(p_i)``
+of the curve's length measure, and minimise the same ``E_N`` (transforms, ball kernel, near field, CG) as the dots
+of ``stipple torus``. The speed constraint ``|p_{i+1} - p_i| = h = L/M`` is a quadratic penalty, an object
+composed with ``SumObjective``; ``draw_line`` drives its weight up in phases until every segment is within
+``constraint_tol`` (1 %) of ``h``. The curve lives in the image's rectangle (``Rectangle``: steps are clipped to
+it, not wrapped), so the drawing never crosses the torus seam; the transforms stay periodic.
+
+The near field leaves out pairs of vertices up to ``exclude`` steps apart along the curve (the near-field radius
+over ``h``, plus one): they are meant to be close (``h`` is below the stroke spacing) and their repulsion would
+only stretch the curve.
+"""
+
+import json
+
+import numpy as np
+
+from .errors import StippleError
+from .halftone import HalftoneResult, Problem, check_count, check_positive, run
+from .manifolds import Torus
+from .nearfield import NearField, TorusPairs
+from .objective import SumObjective
+from .torus import check_weights, sample_image, torus_near_kernel, torus_problem, torus_scale
+
+# Default length: L = LENGTH_FACTOR sqrt(M W H) pixels, so that the vertex spacing h = L/M is a quarter of the
+# mean stroke spacing W H / L (four vertices along the curve per stroke spacing across it).
+LENGTH_FACTOR = 0.5
+# Default bandwidth: N = 4.02 / (mean stroke spacing), the dots' ratio with the stroke spacing as the spacing.
+MODES_PER_SPACING = 4.02
+PENALTY_GROWTH = 8.0
+INITIAL_PENALTY = 1e-3
+MAX_PHASES = 8
+MIN_CURVE_VERTICES = 4
+INITIAL_TOURS = 6
+
+
+def default_length(n_vertices, shape):
+    """Default curve length in pixels, ``0.5 sqrt(M W H)`` (a TSP tour through M dots is ~0.7 sqrt(M W H))."""
+    rows, columns = shape
+    return LENGTH_FACTOR * float(np.sqrt(n_vertices * rows * columns))
+
+
+def default_line_bandwidth(length, shape):
+    """Even ``N = 4.02 / s`` along the longer side, ``s = W H / L`` the mean stroke spacing (unit lengths)."""
+    rows, columns = shape
+    spacing = rows * columns / length / max(rows, columns)
+    return int(2 * np.ceil(MODES_PER_SPACING / spacing / 2))
+
+
+class SpeedConstraint:
+    """``(mu / 2) sum_i (|p_{i+1} - p_i|² / h² - 1)²`` over the segments of a closed polygon: constant speed ``h``.
+
+    Both sides are penalised: the equal-weight quadrature at the vertices is the curve's length measure only if
+    the vertices are equally spaced (a shorter segment would put more mass on less ink), so the curve has length
+    ``M h = L`` once the constraint holds.
+
+    Parameters
+    ----------
+    step : float
+        Segment length ``h`` (physical units: the image's longer side is 1).
+    weight : float
+        Penalty weight ``mu``.
+    scale : array_like
+        Physical side lengths of the unit coordinates (``torus_scale``).
+    hessian : {"gauss-newton", "full"}
+        "full": the exact second variation. "gauss-newton": the curvature of compressed segments
+        (``g_i < 0``) is left out, which keeps the form positive semi-definite for CG's Newton step.
+    """
+
+    def __init__(self, step, weight, scale, hessian="gauss-newton"):
+        self.step = float(step)
+        self.weight = float(weight)
+        self.scale = np.asarray(scale, dtype=float)
+        self.hessian = hessian
+
+    def set_points(self, points):
+        physical = points * self.scale
+        self._delta = np.roll(physical, -1, axis=0) - physical
+        self._excess = np.einsum("ij,ij->i", self._delta, self._delta) / self.step**2 - 1
+        self._bend = self._excess if self.hessian == "full" else np.maximum(self._excess, 0.0)
+
+    def segment_lengths(self):
+        return np.sqrt(np.einsum("ij,ij->i", self._delta, self._delta))
+
+    def energy(self):
+        return 0.5 * self.weight * float(np.dot(self._excess, self._excess))
+
+    def _scatter(self, segment_vectors):
+        """Covector of per-segment physical vectors ``f_i`` (acting on ``p_{i+1} - p_i``) in unit coordinates."""
+        return (np.roll(segment_vectors, 1, axis=0) - segment_vectors) * self.scale
+
+    def gradient(self):
+        force = (2 * self.weight / self.step**2) * self._excess[:, None] * self._delta
+        return self._scatter(force)
+
+    def _differences(self, vector):
+        physical = vector * self.scale
+        return np.roll(physical, -1, axis=0) - physical
+
+    def hessian_gram(self, vectors):
+        """``mu sum_i [4/h⁴ (D_i.a_i)(D_i.b_i) + 2 g_i/h² a_i.b_i]`` with ``a_i, b_i`` the fields' differences."""
+        differences = [self._differences(v) for v in vectors]
+        radial = [np.einsum("ij,ij->i", self._delta, d) for d in differences]
+        count = len(vectors)
+        gram = np.empty((count, count))
+        for a in range(count):
+            for b in range(a, count):
+                along = 4 / self.step**4 * np.dot(radial[a], radial[b])
+                across = 2 / self.step**2 * np.dot(self._bend, np.einsum("ij,ij->i", differences[a], differences[b]))
+                gram[a, b] = gram[b, a] = self.weight * (along + across)
+        return gram
+
+    def hessian_vectors(self, vectors):
+        products = []
+        for vector in vectors:
+            difference = self._differences(vector)
+            radial = np.einsum("ij,ij->i", self._delta, difference)
+            segment = 4 / self.step**4 * radial[:, None] * self._delta
+            segment += 2 / self.step**2 * self._bend[:, None] * difference
+            products.append(self._scatter(self.weight * segment))
+        return products
+
+
+class Rectangle(Torus):
+    """The image's rectangle inside the torus: a step is clipped to the rectangle instead of wrapped.
+
+    The transforms stay periodic, but no vertex ever crosses the seam, so the closed polygon is drawn as optimised.
+    """
+
+    def retract(self, points, v):
+        return np.clip(points + v, 0.0, 1.0)
+
+    def canonical(self, points):
+        return np.clip(np.asarray(points, dtype=np.float64), 0.0, 1.0)
+
+
+def curve_neighbours(count, steps):
+    """``exclude(first, second)`` for ``NearField``: pairs fewer than ``steps + 1`` apart along a closed curve."""
+
+    def exclude(first, second):
+        gap = np.abs(first - second)
+        return np.minimum(gap, count - gap) <= steps
+
+    return exclude
+
+
+def line_problem(
+    weights,
+    n_vertices,
+    length=None,
+    bandwidth=None,
+    *,
+    penalty=1.0,
+    threads=None,
+    epsilon=1e-9,
+    backend="ducc0",
+    hessian="gauss-newton",
+):
+    """The one-line problem: discrepancy of the curve measure, curve near field, speed penalty.
+
+    Parameters
+    ----------
+    weights : array_like of shape (H, W)
+        Density ``w >= 0`` (dark = ink).
+    n_vertices : int
+        Vertices M of the closed polygon (at least 4).
+    length : float, optional
+        Largest curve length L in pixels (default ``default_length``).
+    bandwidth : int, optional
+        Even bandwidth N along the longer side (default ``default_line_bandwidth``).
+    penalty : float
+        Weight of the speed penalty relative to ``penalty_scale`` (``draw_line`` raises it in phases).
+    threads, epsilon, backend : see ``stipple.torus.torus_problem``.
+    hessian : {"gauss-newton", "full"}
+        "full" makes every term's Hessian exact (for tests); the default keeps CG's curvature positive.
+
+    Returns
+    -------
+    Problem
+        ``objective = SumObjective(discrepancy, near field, speed)``; ``settings['domain'] == 'line'``.
+    """
+    weights = check_weights(weights)
+    n_vertices = check_count(n_vertices)
+    if n_vertices < MIN_CURVE_VERTICES:
+        raise StippleError(f"a closed curve needs at least {MIN_CURVE_VERTICES} vertices, not {n_vertices}")
+    length = float(check_positive("length", default_length(n_vertices, weights.shape) if length is None else length))
+    bandwidth = default_line_bandwidth(length, weights.shape) if bandwidth is None else bandwidth
+    dots = torus_problem(
+        weights, n_vertices, bandwidth, backend=backend, threads=threads, epsilon=epsilon, hessian=hessian
+    )
+    scale = torus_scale(weights.shape)
+    step = length / max(weights.shape) / n_vertices
+    near_kernel = torus_near_kernel(dots.bandwidth, scale)
+    steps = int(np.ceil(near_kernel.radius / step)) + 1
+    discrepancy = dots.discrepancy
+    near = NearField(
+        near_kernel,
+        discrepancy.weight,
+        TorusPairs(scale),
+        factor=float(np.prod(scale)),
+        hessian=hessian,
+        exclude=curve_neighbours(n_vertices, steps),
+    )
+    mu = penalty * penalty_scale(discrepancy, n_vertices)
+    speed = SpeedConstraint(step, mu, scale, hessian)
+    settings = {**dots.settings, "domain": "line", "length": length, "penalty": float(penalty), "exclude": steps}
+    problem = Problem(
+        domain="torus",
+        manifold=Rectangle(scale),
+        objective=SumObjective(discrepancy, near, speed),
+        discrepancy=discrepancy,
+        n_points=n_vertices,
+        bandwidth=dots.bandwidth,
+        sample=lambda rng, count: initial_loop(weights, count, length, rng),
+        settings=settings,
+    )
+    problem.speed, problem.step, problem.length = speed, step, length
+    return problem
+
+
+def penalty_scale(discrepancy, n_vertices):
+    """A penalty weight whose force on a segment stretched by 1 % is about one vertex's discrepancy force.
+
+    A vertex carries ``lam = m / M``; the discrepancy's force on it is of order ``lam² M`` times the kernel's
+    slope, so ``lam² M`` (with ``m`` the density's mass) sets the scale.
+    """
+    return float(discrepancy.weight**2 * n_vertices)
+
+
+def hilbert_index(x, y, order=16):
+    """Index along the Hilbert curve of the ``2^order`` grid of integer cells ``(x, y)``."""
+    side = 1 << order
+    x, y = np.array(x, dtype=np.int64), np.array(y, dtype=np.int64)
+    index = np.zeros(len(x), dtype=np.int64)
+    s = side >> 1
+    while s > 0:
+        rx, ry = (x & s) > 0, (y & s) > 0
+        index += s * s * ((3 * rx) ^ ry)
+        flip = ~ry & rx
+        x[flip], y[flip] = s - 1 - x[flip], s - 1 - y[flip]
+        swap = ~ry
+        x[swap], y[swap] = y[swap], x[swap].copy()
+        s >>= 1
+    return index
+
+
+def closed_length(points):
+    return float(np.sum(np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)))
+
+
+def resample_closed(points, count):
+    """``count`` points equally spaced by arclength along the closed polygon through ``points``."""
+    closed = np.vstack([points, points[:1]])
+    cumulative = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
+    targets = np.arange(count) * cumulative[-1] / count
+    return np.stack([np.interp(targets, cumulative, closed[:, axis]) for axis in range(2)], axis=1)
+
+
+def hilbert_tour(weights, count, rng):
+    """``count`` density samples (pixel units) in Hilbert-curve order: a closed loop through the image."""
+    rows, columns = weights.shape
+    samples = sample_image(weights, rng, count) * np.array([columns, rows])
+    cells = np.minimum((samples / max(rows, columns) * (1 << 16)).astype(np.int64), (1 << 16) - 1)
+    return samples[np.argsort(hilbert_index(cells[:, 0], cells[:, 1]), kind="stable")]
+
+
+def initial_loop(weights, n_vertices, length, rng):
+    """A closed loop of ``n_vertices`` equally spaced vertices (unit coordinates) of length about ``length`` px.
+
+    A Hilbert-curve tour through density samples, with as many samples as make the tour about ``length`` long
+    (a tour's length grows like the square root of its samples), resampled by arclength.
+    """
+    rows, columns = weights.shape
+    count = max(MIN_CURVE_VERTICES, n_vertices // 4)
+    best = None
+    for _ in range(INITIAL_TOURS):
+        loop = resample_closed(hilbert_tour(weights, count, rng), n_vertices)
+        ratio = length / closed_length(loop)
+        if best is None or abs(np.log(ratio)) < abs(np.log(best[1])):
+            best = (loop, ratio)
+        count = int(np.clip(count * ratio**2, MIN_CURVE_VERTICES, 8 * n_vertices))
+    return best[0] / np.array([columns, rows])
+
+
+def segment_ratio(problem, points):
+    """``max |p_{i+1} - p_i|`` over the allowed ``h`` and over the mean segment, at ``points``."""
+    problem.speed.set_points(points)
+    lengths = problem.speed.segment_lengths()
+    return float(lengths.max() / problem.step), float(lengths.max() / lengths.mean())
+
+
+def read_checkpoint_settings(path):
+    """The ``settings`` saved in a checkpoint (to rebuild the phase it was written in), or ``{}``."""
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            return json.loads(str(archive["metadata"])).get("settings", {})
+    except (OSError, ValueError, KeyError, EOFError):
+        return {}
+
+
+def draw_line(
+    image,
+    n_vertices,
+    length=None,
+    bandwidth=None,
+    *,
+    seed=0,
+    init=None,
+    tol=1e-4,
+    iterations=2000,
+    phase_iterations=None,
+    constraint_tol=0.01,
+    initial_penalty=INITIAL_PENALTY,
+    time_limit=None,
+    callback=None,
+    checkpoint=None,
+    checkpoint_seconds=None,
+    checkpoint_iterations=None,
+    resume=False,
+    threads=None,
+    epsilon=1e-9,
+    backend="ducc0",
+):
+    """One closed curve with ``n_vertices`` vertices whose length measure reproduces ``image``.
+
+    Phase 0 runs CG with penalty weight 1 (``penalty_scale``) for up to ``iterations``; every following phase
+    multiplies it by 8 and runs up to ``phase_iterations`` more (default ``iterations // 4``), until the longest
+    segment is within ``constraint_tol`` of ``h = L / M``.
+
+    Parameters
+    ----------
+    image : array_like of shape (H, W), or a path
+        Density (``stipple.load_density``).
+    n_vertices : int
+    length : float, optional
+        Curve length bound L in pixels (default ``0.5 sqrt(M W H)``).
+    bandwidth : int, optional
+    init : array_like, optional
+        Starting vertices in unit coordinates (default: ``initial_loop``).
+    tol, iterations, time_limit, callback, checkpoint, checkpoint_seconds, checkpoint_iterations, resume :
+        As for ``stipple.halftone.run``; ``time_limit`` counts over all phases.
+
+    Returns
+    -------
+    HalftoneResult
+        ``points`` (M, 2) in unit coordinates of the image, in path order; ``state`` of the last phase. Also
+        ``problem`` and ``penalty`` of the last phase, and ``segment_lengths`` in pixels.
+    """
+    import os
+    import time
+
+    from .checkpoint import Checkpointer
+    from .halftone import _chain
+    from .inputs import load_density
+
+    if isinstance(image, (str, os.PathLike)):
+        image = load_density(image)
+    weights = check_weights(image)
+    phase_iterations = max(1, iterations // 4) if phase_iterations is None else phase_iterations
+    penalty = initial_penalty
+    if resume and checkpoint is not None:
+        penalty = float(read_checkpoint_settings(checkpoint).get("penalty", 1.0))
+
+    def build(weight):
+        return line_problem(
+            weights, n_vertices, length, bandwidth, penalty=weight, threads=threads, epsilon=epsilon, backend=backend
+        )
+
+    problem = build(penalty)
+    if init is None:
+        init = initial_loop(weights, problem.n_points, problem.length, np.random.default_rng(seed))
+    started = time.perf_counter()
+    result = run(
+        problem,
+        init=init,
+        tol=tol,
+        iterations=iterations,
+        time_limit=time_limit,
+        callback=callback,
+        checkpoint=checkpoint,
+        checkpoint_seconds=checkpoint_seconds,
+        checkpoint_iterations=checkpoint_iterations,
+        resume=resume,
+    )
+    for _ in range(MAX_PHASES):
+        if constraints_hold(problem, result.points, constraint_tol) or result.status == "stopped":
+            break
+        remaining = None if time_limit is None else time_limit - (time.perf_counter() - started)
+        if remaining is not None and remaining <= 0:
+            break
+        penalty *= PENALTY_GROWTH
+        problem = build(penalty)
+        saver = None
+        if checkpoint is not None:
+            saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)
+        result = run(
+            problem,
+            init=result.points,
+            tol=tol,
+            iterations=phase_iterations,
+            time_limit=remaining,
+            callback=_chain(saver, callback),
+        )
+        if saver is not None:
+            saver.save(result.state)
+    result.seconds = time.perf_counter() - started
+    result.problem, result.penalty = problem, penalty
+    problem.speed.set_points(result.points)
+    result.segment_lengths = problem.speed.segment_lengths() * max(weights.shape)
+    return result
+
+
+def constraints_hold(problem, points, constraint_tol):
+    """Every segment within ``(1 ± constraint_tol) h``."""
+    problem.speed.set_points(points)
+    return np.abs(problem.speed.segment_lengths() / problem.step - 1).max() <= constraint_tol
+
+
+def line_points(points):
+    """Vertices in the unit rectangle (``Rectangle`` keeps them there; a given ``init`` is clipped on entry)."""
+    return np.clip(points, 0.0, 1.0)
+
+
+__all__ = ["HalftoneResult", "draw_line", "line_problem"]

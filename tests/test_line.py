@@ -1,0 +1,157 @@
+"""One-line drawings: the curve objective's derivatives, the constraints, the curve near field, the drawing."""
+
+import numpy as np
+import pytest
+from conftest import taylor_slope
+
+from stipple.evaluate import fitted_similarity, line_ink
+from stipple.line import (
+    SpeedConstraint,
+    draw_line,
+    hilbert_index,
+    initial_loop,
+    line_problem,
+    resample_closed,
+)
+from stipple.objective import SumObjective
+
+STEPS = np.logspace(-2.5, -4, 6)
+
+
+def small_line(rng, hessian="full", penalty=3.0):
+    """A 40-vertex loop on a 12×20 image, perturbed so that some segments are stretched and some compressed."""
+    weights = rng.random((12, 20))
+    problem = line_problem(weights, 40, length=50.0, bandwidth=14, penalty=penalty, epsilon=1e-13, hessian=hessian)
+    points = initial_loop(weights, 40, 50.0, rng) + 0.01 * rng.standard_normal((40, 2))
+    return problem, points
+
+
+def energy_at(objective, points):
+    objective.set_points(points)
+    return objective.energy()
+
+
+def test_every_term_of_the_curve_objective_takes_part(rng):
+    problem, points = small_line(rng)
+    discrepancy, near, speed = problem.objective.terms
+    problem.objective.set_points(points)
+    assert near.pair_count > 0 and speed.energy() > 0
+    assert np.any(speed._excess > 0) and np.any(speed._excess < 0)
+
+
+def test_curve_objective_gradient_taylor_slope_two(rng):
+    problem, points = small_line(rng)
+    objective = problem.objective
+    objective.set_points(points)
+    energy, gradient = objective.energy(), objective.gradient()
+    direction = rng.standard_normal(points.shape)
+    slope = taylor_slope(
+        lambda t: energy_at(objective, points + t * direction) - energy - t * np.sum(gradient * direction), STEPS
+    )
+    assert slope == pytest.approx(2, abs=0.1)
+
+
+@pytest.mark.parametrize("terms", ["constraints", "whole"])
+def test_curve_objective_full_hessian_taylor_slope_three(rng, terms):
+    problem, points = small_line(rng)
+    objective = problem.objective
+    if terms == "constraints":
+        objective = SumObjective(problem.speed)
+    objective.set_points(points)
+    energy, gradient = objective.energy(), objective.gradient()
+    direction = rng.standard_normal(points.shape)
+    (hess_direction,) = objective.hessian_vectors([direction])
+    assert objective.hessian_gram([direction])[0, 0] == pytest.approx(np.sum(direction * hess_direction), rel=1e-9)
+
+    def remainder(t):
+        linear = t * np.sum(gradient * direction) + 0.5 * t**2 * np.sum(direction * hess_direction)
+        return energy_at(objective, points + t * direction) - energy - linear
+
+    assert taylor_slope(remainder, STEPS) == pytest.approx(3, abs=0.15)
+
+
+def test_speed_constraint_matches_its_direct_sum(rng):
+    points = rng.random((30, 2)) * 1.2 - 0.1
+    scale, step, weight = np.array([1.0, 0.6]), 0.05, 2.5
+    speed = SpeedConstraint(step, weight, scale)
+    speed.set_points(points)
+    physical = points * scale
+    lengths = np.array([np.linalg.norm(physical[(i + 1) % 30] - physical[i]) for i in range(30)])
+    assert speed.energy() == pytest.approx(weight / 2 * np.sum((lengths**2 / step**2 - 1) ** 2), rel=1e-12)
+
+
+def test_gauss_newton_forms_are_positive_semi_definite(rng):
+    problem, points = small_line(rng, hessian="gauss-newton")
+    problem.objective.set_points(points)
+    vectors = [rng.standard_normal(points.shape) for _ in range(4)]
+    assert (
+        np.linalg.eigvalsh(problem.objective.hessian_gram(vectors)).min()
+        > -1e-12 * np.abs(problem.objective.hessian_gram(vectors)).max()
+    )
+
+
+def test_near_field_leaves_out_curve_neighbours_only(rng):
+    problem, points = small_line(rng)
+    near = problem.objective.terms[1]
+    steps = problem.settings["exclude"]
+    near.set_points(points)
+    first, second, count = near._pairs
+    gap = np.abs(first - second)
+    assert np.minimum(gap, count - gap).min() > steps
+    physical = points * near.geometry.scale
+    expected = 0
+    for i in range(count):
+        for j in range(i + 1, count):
+            delta = near.geometry.displacement(physical[i : i + 1], physical[j : j + 1])[0]
+            cyclic = min(j - i, count - (j - i))
+            expected += cyclic > steps and np.hypot(*delta) < near.kernel.radius
+    assert near.pair_count == expected and expected > 0
+
+
+def test_hilbert_index_visits_neighbouring_cells_in_turn():
+    side = 8
+    y, x = np.divmod(np.arange(side * side), side)
+    order = np.argsort(hilbert_index(x, y, order=3))
+    steps = np.abs(np.diff(x[order])) + np.abs(np.diff(y[order]))
+    assert sorted(hilbert_index(x, y, order=3)) == list(range(side * side))
+    assert np.all(steps == 1)
+
+
+def test_resample_closed_spaces_points_equally_along_a_square():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    points = resample_closed(square, 16)
+    gaps = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
+    np.testing.assert_allclose(gaps, 0.25, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def uniform_line():
+    weights = np.full((48, 48), 0.6)
+    return weights, draw_line(weights, 1500, iterations=150, seed=1)
+
+
+def test_line_on_a_uniform_image_holds_the_speed_constraint(uniform_line):
+    weights, result = uniform_line
+    pixels = result.points * 48
+    segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
+    assert segments.max() / segments.mean() <= 1.05
+    assert np.all((result.points >= 0) & (result.points <= 1))
+    assert segments.sum() == pytest.approx(result.problem.length, rel=0.02)
+
+
+def test_line_on_a_uniform_image_has_nearly_uniform_density(uniform_line):
+    """Ink per 12×12 block: far more even than the same length of i.i.d. segments would give, and than at start."""
+    weights, result = uniform_line
+    rng = np.random.default_rng(5)
+
+    def block_spread(pixels):
+        ink = line_ink(pixels, weights.shape)
+        blocks = ink.reshape(4, 12, 4, 12).sum(axis=(1, 3))
+        return blocks.std() / blocks.mean()
+
+    start = initial_loop(weights, 1500, result.problem.length, rng) * 48
+    spread = block_spread(result.points * 48)
+    assert spread < 0.5 * block_spread(start)
+    assert spread < 0.08
+    similarity = fitted_similarity(weights, line_ink(result.points * 48, weights.shape), blurs=(4.0,))
+    assert similarity[0]["psnr"] > 25

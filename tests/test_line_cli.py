@@ -1,0 +1,81 @@
+"""``stipple line``: outputs, evaluation of a line, checkpoints and bad input."""
+
+import re
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+
+
+@pytest.fixture
+def ramp_path(tmp_path):
+    ramp = np.tile(np.linspace(0, 255, 48, dtype=np.uint8), (32, 1))
+    path = tmp_path / "ramp.png"
+    Image.fromarray(ramp).save(path)
+    return path
+
+
+def run(args, **kwargs):
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+
+
+def test_line_writes_one_closed_path_as_csv_svg_png(ramp_path, tmp_path):
+    outputs = [tmp_path / name for name in ("line.csv", "line.svg", "line.png")]
+    args = ["line", ramp_path, "-M", 400, "--iterations", 60, "-q", "--pen-width", "0.5mm"]
+    result = run(args + [item for path in outputs for item in ("-o", path)])
+    assert result.exit_code == 0, result.output
+    assert outputs[0].read_text().startswith("x,y\n")
+    table = np.loadtxt(outputs[0], delimiter=",", skiprows=1)
+    assert table.shape == (400, 2)
+    assert np.all((table >= 0) & (table <= [48, 32]))
+    segments = np.linalg.norm(np.roll(table, -1, axis=0) - table, axis=1)
+    assert segments.max() / segments.mean() <= 1.05
+    assert np.sum(table[:, 0] < 24) > 2 * np.sum(table[:, 0] >= 24)  # the line is denser where the ramp is dark
+    svg = outputs[1].read_text()
+    assert svg.count("<path") == 1 and svg.count(" Z") == 1 and 'fill="none"' in svg
+    path = re.search(r'd="M ([^"]*) Z"', svg).group(1)
+    vertices = np.array([[float(v) for v in pair.split(",")] for pair in path.split()])
+    np.testing.assert_allclose(vertices, table, atol=2e-3)
+    assert 'stroke-width="0.1200"' in svg  # 0.5 mm of a 200 mm wide drawing of 48 px
+    picture = np.asarray(Image.open(outputs[2]))
+    assert picture.shape == (128, 192) and picture.min() < 60 and picture.max() == 255
+
+
+def test_evaluate_a_line(ramp_path, tmp_path):
+    csv = tmp_path / "line.csv"
+    assert run(["line", ramp_path, "-M", 300, "--iterations", 40, "-q", "-o", csv]).exit_code == 0
+    result = run(["evaluate", "--line", csv, ramp_path])
+    assert result.exit_code == 0, result.output
+    assert "E_N:" in result.output and "length pixels:" in result.output
+    assert re.search(r"blur sigma 2 px: PSNR [0-9.]+ dB", result.output)
+    assert "max over mean segment: 1.0" in result.output
+
+
+def test_line_resumes_from_its_checkpoint(ramp_path, tmp_path):
+    checkpoint, first, second = tmp_path / "run.npz", tmp_path / "a.csv", tmp_path / "b.csv"
+    args = ["line", ramp_path, "-M", 200, "-q", "--checkpoint", checkpoint]
+    assert run(args + ["--iterations", 10, "-o", first]).exit_code == 0
+    refused = run(args + ["--iterations", 20, "-o", second])
+    assert refused.exit_code == 1 and "checkpoint exists" in refused.output
+    resumed = run(args + ["--iterations", 40, "--resume", "-o", second])
+    assert resumed.exit_code == 0, resumed.output
+    assert not np.array_equal(
+        np.loadtxt(first, delimiter=",", skiprows=1), np.loadtxt(second, delimiter=",", skiprows=1)
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["-M", 3], "at least 4 vertices"),
+        (["-M", 100, "--length", -5], "length must be a positive number"),
+        (["-M", 100, "-o", "x.geojson"], "GeoJSON output is for sphere points"),
+    ],
+)
+def test_line_bad_input(ramp_path, tmp_path, args, message, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run(["line", ramp_path, "--iterations", 2, "-q"] + args)
+    assert result.exit_code == 1 and message in result.output, result.output
