@@ -19,6 +19,7 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
     assert [case["near_field"] for case in report["cases"]] == [True, False, True, True, False, True, False]
     for case in report["cases"]:
         assert case["seconds_per_iteration"] > 0 and case["raw_transform_seconds_per_iteration"] > 0
+        assert case["seconds_per_iteration_at_start"] > 0
         assert {"M", "N", "threads", "backend", "transforms_per_iteration", "peak_memory_mb"} <= set(case)
         assert (case["near_field_pairs"] > 0) == case["near_field"]
 

@@ -77,7 +77,7 @@ def test_signal_writes_checkpoint_and_outputs_then_resumes(tmp_path, uninterrupt
 
 
 def test_extending_a_finished_run_with_more_iterations(tmp_path):
-    base = ["sphere", "builtin:gaussians", "-M", "400", "-N", "24", "--tol", "1e-14", "-q"]
+    base = ["sphere", "builtin:gaussians", "-M", "400", "-N", "24", "--tol", "1e-14", "-q", "--threads", "1"]
     checkpoint = tmp_path / "run.npz"
     assert stipple(base + ["--iterations", "30", "--checkpoint", str(checkpoint), "-o", "-"]).returncode == 0
     extended = stipple(base + ["--iterations", "60", "--checkpoint", str(checkpoint), "--resume", "-o", "-"])
