@@ -22,6 +22,7 @@ from .errors import StippleError
 from .halftone import MAX_POINTS, check_integer
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
+from .plotter import DOT_STYLES
 from .transforms import BACKENDS
 
 
@@ -212,7 +213,11 @@ def common_options(function):
             help="Sum the kernel's short range over neighbouring pairs: the untruncated discrepancy, no clumps "
             "(default; sphere: with the distance kernel). --no-near-field: the paper's bandlimited E_N.",
         ),
-        click.option("--invert", is_flag=True, help="Images: w = u (white dots on black); maps: w = 1 - map."),
+        click.option(
+            "--invert",
+            is_flag=True,
+            help="Dots on the light parts (images: w = u; maps: w = 1 - map), drawn white on black.",
+        ),
         click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
         click.option(
             "--range",
@@ -234,6 +239,7 @@ def common_options(function):
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
         click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
+        look_options,
         click.option(
             "--checkpoint",
             type=click.Path(dir_okay=False),
@@ -264,11 +270,49 @@ def load_input(source, **options):
     return load_density(source, **options)
 
 
-def render_settings(width, dot_radius, png_width):
+def look_options(function):
+    """Options of the drawing (SVG and PNG) shared by every command that draws dots."""
+    options = [
+        click.option(
+            "--background",
+            default=None,
+            help="Paper colour of SVG/PNG: #rrggbb, #rgb or a name (default white; black with --invert).",
+        ),
+        click.option(
+            "--color",
+            default=None,
+            help="Dot colour of SVG/PNG (default black; white with --invert).",
+        ),
+        click.option(
+            "--dot-style",
+            type=click.Choice(("disc",) + DOT_STYLES),
+            default="disc",
+            show_default=True,
+            help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
+            "previews the pen strokes.",
+        ),
+        click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width of the pen styles."),
+    ]
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def render_settings(options):
+    """The drawing settings of the command's options: lengths parsed, colours resolved (``--invert``: white dots
+    on black unless ``--background`` / ``--color`` say otherwise)."""
+    from .outputs import BLACK, WHITE, parse_colour
+
+    invert = bool(options.get("invert"))
+    background, color = options.get("background"), options.get("color")
     return {
-        "width": parse_length(width, "width"),
-        "dot_radius": None if dot_radius is None else parse_length(dot_radius, "dot-radius"),
-        "png_width": png_width,
+        "width": parse_length(options["width"], "width"),
+        "dot_radius": None if options["dot_radius"] is None else parse_length(options["dot_radius"], "dot-radius"),
+        "png_width": options["png_width"],
+        "background": parse_colour(background, "background") if background else (BLACK if invert else WHITE),
+        "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
+        "dot_style": options["dot_style"],
+        "pen_width": parse_length(options["pen_width"], "pen-width"),
     }
 
 
@@ -414,7 +458,7 @@ def torus(ctx, image, **options):
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        settings = render_settings(options)
         inputs = [("image", image), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             weights = load_input(
@@ -502,7 +546,7 @@ def sphere(ctx, map_source, **options):
     started = time.perf_counter()
     map_source = resolve_input(ctx, map_source)
     try:
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        settings = render_settings(options)
         view = parse_view(options["view"])
         lon0 = check_longitude("lon0", options["lon0"])
         formats = [output_format(path) for path in options["outputs"]]
@@ -674,15 +718,17 @@ def unit_rows(vectors, name):
     "--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True, help="Sphere PNG view."
 )
 @click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
+@click.option("--invert", is_flag=True, help="Draw white dots on black.")
+@look_options
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
-def render(points_source, outputs, like, size, width, dot_radius, png_width, order, coords, projection, view, quiet):
+def render(points_source, outputs, like, size, coords, projection, view, **options):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     from .outputs import sphere_output, torus_output
     from .sphere import lon_lat
 
-    options = {"order": order, "quiet": quiet}
+    png_width = options["png_width"]
     try:
-        settings = render_settings(width, dot_radius, png_width)
+        settings = render_settings(options)
         angles = parse_view(view)
         formats = [output_format(path) for path in outputs]
         with guarded_files([("points", points_source), ("--like image", like)], outputs):

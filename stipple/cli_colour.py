@@ -16,8 +16,7 @@ from .cli import (
 )
 from .colour import SEPARATIONS
 from .errors import StippleError
-from .outputs import output_format, parse_length
-from .plotter import DOT_STYLES
+from .outputs import output_format
 from .transforms import BACKENDS
 
 
@@ -45,15 +44,6 @@ from .transforms import BACKENDS
     show_default=True,
     help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
 )
-@click.option(
-    "--dot-style",
-    type=click.Choice(("disc",) + DOT_STYLES),
-    default="disc",
-    show_default=True,
-    help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
-    "previews the pen strokes.",
-)
-@click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width for the pen-path styles.")
 @click.option("--init", type=click.Choice(("density", "uniform")), default="density", show_default=True)
 @click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
 @click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
@@ -72,8 +62,8 @@ def colour(ctx, image, **options):
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         check_colour_options(options)
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
-        pen_width = parse_length(options["pen_width"])
+        settings = render_settings(options)
+        settings.pop("color")
         with guarded_files([("image", image)], options["outputs"], options["checkpoint"]):
             rgb = load_colour(image)
             check_png(options, rgb.shape[1::-1])
@@ -99,9 +89,7 @@ def colour(ctx, image, **options):
             ink = sum(layer.density for layer in layers).mean()
             write_outputs(
                 options["outputs"],
-                lambda fmt: layered_torus_output(
-                    placed, shape, fmt, ink=ink, dot_style=options["dot_style"], pen_width=pen_width, **settings
-                ),
+                lambda fmt: layered_torus_output(placed, shape, fmt, ink=ink, **settings),
             )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
@@ -114,6 +102,8 @@ def check_colour_options(options):
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
     if options["gamma"] != 1.0:
         raise StippleError("--gamma is for gray images and maps, not colour separation")
+    if options["color"] is not None or options["background"] is not None:
+        raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 
 
 def check_png(options, canvas):
