@@ -298,6 +298,42 @@ def look_options(function):
     return function
 
 
+def palette_options(default):
+    """``--palette``, ``--black`` and ``--union-weight``: colour separation into one class of dots per ink."""
+
+    def decorate(function):
+        options = [
+            click.option(
+                "--palette",
+                "--separation",
+                "palette",
+                default=default,
+                show_default=default is not None,
+                help="Inks: cmyk, cmy, gray (one black ink), or pen colours '#00a0e0,#e0007a,#ffe000,#000000' "
+                "(separated by non-negative least squares; README). One layer of dots per ink, optimised jointly.",
+            ),
+            click.option(
+                "--black",
+                type=click.FloatRange(0, 1),
+                default=1.0,
+                show_default=True,
+                help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
+            ),
+            click.option(
+                "--union-weight",
+                type=float,
+                default=1.0,
+                show_default=True,
+                help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
+            ),
+        ]
+        for option in reversed(options):
+            function = option(function)
+        return function
+
+    return decorate
+
+
 def render_settings(options):
     """The drawing settings of the command's options: lengths parsed, colours resolved (``--invert``: white dots
     on black unless ``--background`` / ``--color`` say otherwise)."""
@@ -447,9 +483,11 @@ def main():
     show_default=True,
     help="Hessian of the Newton step and Daniel's beta.",
 )
+@palette_options(None)
 @click.pass_context
 def torus(ctx, image, **options):
-    """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus."""
+    """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus; with --palette, one
+    layer of dots per ink (as 'stipple colour')."""
     from .outputs import torus_output
     from .torus import DEFAULT_EPSILON, torus_problem
 
@@ -457,6 +495,10 @@ def torus(ctx, image, **options):
     image = resolve_input(ctx, image)
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    if options["palette"] is not None:
+        from .cli_colour import run_colour
+
+        return run_colour(image, options, started)
     try:
         settings = render_settings(options)
         inputs = [("image", image), init_input(options["init"])]
@@ -644,11 +686,16 @@ def read_sphere_init(init):
 MAX_PIXEL_COORDINATE = 2**31
 
 
-def read_points(source):
+LABEL_COLUMNS = ("layer", "color", "colour")
+
+
+def read_points(source, labels=False):
     """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``.
 
     The header decides: ``x,y,z`` and ``lon,lat`` are sphere points (latitudes in [-90, 90], no zero
-    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size).
+    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size). With
+    ``labels``, also each torus point's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes),
+    or None: ``(domain, points, names)``.
     """
     from .inputs import read_points_csv, read_source
     from .sphere import from_lon_lat
@@ -667,12 +714,14 @@ def read_points(source):
         return points
 
     if {"x", "y", "z"} <= columns:
-        return "sphere", unit_rows(table(("x", "y", "z")), name)
+        found = "sphere", unit_rows(table(("x", "y", "z")), name)
+        return (*found, None) if labels else found
     if {"lon", "lat"} <= columns:
         longitude, latitude = table(("lon", "lat")).T
         if np.any(np.abs(latitude) > 90):
             raise StippleError(f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(latitude).max():g}")
-        return "sphere", from_lon_lat(longitude, latitude)
+        found = "sphere", from_lon_lat(longitude, latitude)
+        return (*found, None) if labels else found
     if {"x", "y"} <= columns:
         pixels = table(("x", "y"))
         if np.abs(pixels).max() >= MAX_PIXEL_COORDINATE:
@@ -680,8 +729,23 @@ def read_points(source):
                 f"{name}: x,y must be pixel positions below {MAX_PIXEL_COORDINATE} in size, "
                 f"not {np.abs(pixels).max():g}"
             )
-        return "torus", pixels
+        if not labels:
+            return "torus", pixels
+        return "torus", pixels, read_labels(data, columns, len(pixels), name)
     raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+
+
+def read_labels(data, columns, count, name):
+    """Each row's layer name from the ``layer`` / ``color`` column of CSV ``data``, or None without one."""
+    column = next((label for label in LABEL_COLUMNS if label in columns), None)
+    if column is None:
+        return None
+    lines = [line.strip() for line in data.decode("utf-8-sig").splitlines() if line.strip()]
+    index = [cell.strip().lower() for cell in lines[0].split(",")].index(column)
+    names = [line.split(",")[index].strip() for line in lines[1:]]
+    if len(names) != count or not all(names):
+        raise StippleError(f"{name}: every row needs a {column} name")
+    return np.array(names)
 
 
 def unit_rows(vectors, name):
@@ -789,17 +853,44 @@ def torus_canvas(pixels, like, size):
 @click.option("--invert", is_flag=True, help="As for the run.")
 @click.option("--gamma", type=float, default=1.0, show_default=True, help="As for the run.")
 @click.option("--range", "value_range", type=(float, float), default=None, help="As for the run.")
+@click.option(
+    "--palette",
+    default="cmyk",
+    show_default=True,
+    help="Layered CSVs (x,y,layer or x,y,color): the run's --palette, to separate INPUT into its inks.",
+)
+@click.option("--black", type=click.FloatRange(0, 1), default=1.0, show_default=True, help="As for the run (cmyk).")
 @click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
 @click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
 def evaluate(
-    points_source, input_source, bandwidth, uniform, kernel, lon0, invert, gamma, value_range, json_path, spectrum_path
+    points_source,
+    input_source,
+    bandwidth,
+    uniform,
+    kernel,
+    lon0,
+    invert,
+    gamma,
+    value_range,
+    palette,
+    black,
+    json_path,
+    spectrum_path,
 ):
-    """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform)."""
+    """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
+    CSVs per ink and for all dots together."""
     import json
 
     from .outputs import commit_outputs, spectrum_plot
 
-    options = {"uniform": uniform, "invert": invert, "gamma": gamma, "value_range": value_range}
+    options = {
+        "uniform": uniform,
+        "invert": invert,
+        "gamma": gamma,
+        "value_range": value_range,
+        "palette": palette,
+        "black": black,
+    }
     try:
         options["lon0"] = check_longitude("lon0", lon0)
         check_extension("--json", json_path, ".json")
@@ -809,12 +900,15 @@ def evaluate(
         reports = [(role, path) for role, path in (("--json", json_path), ("--spectrum", spectrum_path)) if path]
         reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
         with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
-            domain, points = read_points(points_source)
+            domain, points, names = read_points(points_source, labels=True)
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
             if spectrum_path is not None and domain != "torus":
                 raise StippleError("--spectrum is for torus points only")
-            report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
+            if names is not None:
+                report = evaluate_layers(points, names, input_source, bandwidth, options)
+            else:
+                report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
             files = []
             if spectrum_path is not None:
                 spectrum = report["spectrum"]
@@ -857,6 +951,42 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     return evaluate_sphere(problem, points, density)
 
 
+def evaluate_layers(pixels, names, input_source, bandwidth, options):
+    """The report of all dots against the inks' summed density, with ``classes``: each ink's dots against its
+    own density (its count beside its quota ``M · mass share``)."""
+    from .colour import parse_palette, separate
+    from .evaluate import evaluate_torus
+    from .inputs import load_colour
+    from .multiclass import class_bandwidth
+    from .torus import torus_problem
+
+    if input_source is None:
+        raise StippleError("missing INPUT: the colour image the layered points were made from")
+    rgb = load_colour(input_source)
+    layers = separate(rgb, parse_palette(options["palette"]), options["black"])
+    unknown = sorted(set(names.tolist()) - {layer.name for layer in layers})
+    if unknown:
+        inks = ", ".join(layer.name for layer in layers)
+        raise StippleError(f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} ({inks})")
+    rows, columns = rgb.shape[:2]
+    unit = np.mod(pixels / np.array([columns, rows]), 1.0)
+    union = sum(layer.density for layer in layers)
+    report = evaluate_torus(torus_problem(union, len(unit), bandwidth, epsilon=1e-10), unit, union)
+    report["classes"] = []
+    for layer in layers:
+        chosen = names == layer.name
+        count, share = int(chosen.sum()), float(layer.density.sum() / union.sum())
+        entry = {"name": layer.name, "points": count, "mass_share": share, "quota": share * len(unit)}
+        if count >= 2:
+            band = None if bandwidth is None else class_bandwidth(bandwidth, count, len(unit))
+            problem = torus_problem(layer.density, count, band, epsilon=1e-10)
+            measured = evaluate_torus(problem, unit[chosen], layer.density)
+            entry.update({key: measured[key] for key in ("bandwidth", "energy", "energy_ratio_to_iid")})
+            entry["neighbour_distance_over_hexagonal"] = measured.get("neighbour_distance_over_hexagonal")
+        report["classes"].append(entry)
+    return report
+
+
 def format_report(report):
     """The evaluation as aligned ``name: value`` lines (the spectrum only as its range)."""
     lines = [
@@ -875,6 +1005,14 @@ def format_report(report):
     for key in ("max_coefficient_error", "minimum_separation_degrees", "cap_discrepancy"):
         if key in report:
             lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
+    for item in report.get("classes", []):
+        line = f"ink {item['name']}: {item['points']} dots (quota {item['quota']:.2f})"
+        if "energy_ratio_to_iid" in item:
+            line += f", N {item['bandwidth']}, ratio to i.i.d. {item['energy_ratio_to_iid']:.4g}"
+        stats = item.get("neighbour_distance_over_hexagonal") or {}
+        if stats:
+            line += ", NN / hexagonal " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
+        lines.append(line)
     return "\n".join(lines)
 
 

@@ -8,13 +8,13 @@ from .cli import (
     common_options,
     finish,
     guarded_files,
+    palette_options,
     physical_centres,
     plot_order,
     render_settings,
     solve,
     write_outputs,
 )
-from .colour import SEPARATIONS
 from .errors import StippleError
 from .outputs import output_format
 from .transforms import BACKENDS
@@ -23,27 +23,7 @@ from .transforms import BACKENDS
 @click.command()
 @click.argument("image", required=False)
 @common_options
-@click.option(
-    "--separation",
-    type=click.Choice(SEPARATIONS),
-    default="cmyk",
-    show_default=True,
-    help="Inks: cyan, magenta, yellow and black; no black; or one black ink (1 - luminance).",
-)
-@click.option(
-    "--black",
-    type=click.FloatRange(0, 1),
-    default=1.0,
-    show_default=True,
-    help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
-)
-@click.option(
-    "--union-weight",
-    type=float,
-    default=1.0,
-    show_default=True,
-    help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
-)
+@palette_options("cmyk")
 @click.option("--init", type=click.Choice(("density", "uniform")), default="density", show_default=True)
 @click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
 @click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
@@ -51,17 +31,24 @@ from .transforms import BACKENDS
 def colour(ctx, image, **options):
     """Stipple a colour IMAGE with one layer of dots per ink (CSV x,y,layer; SVG one layer per pen)."""
     from .cli import resolve_input
-    from .colour import colour_problem
-    from .inputs import load_colour
-    from .outputs import layered_torus_output
-    from .torus import DEFAULT_EPSILON
 
     started = time.perf_counter()
     image = resolve_input(ctx, image)
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    run_colour(image, options, started)
+
+
+def run_colour(image, options, started):
+    """Separate, optimise jointly and write one layer per ink (``stipple colour``, ``stipple torus --palette``)."""
+    from .colour import colour_problem, parse_palette
+    from .inputs import load_colour
+    from .outputs import layered_torus_output
+    from .torus import DEFAULT_EPSILON
+
     try:
         check_colour_options(options)
+        palette = parse_palette(options["palette"])
         settings = render_settings(options)
         settings.pop("color")
         with guarded_files([("image", image)], options["outputs"], options["checkpoint"]):
@@ -71,7 +58,7 @@ def colour(ctx, image, **options):
                 rgb,
                 options["n_points"],
                 options["bandwidth"],
-                separation=options["separation"],
+                separation=palette,
                 black=options["black"],
                 union_weight=options["union_weight"],
                 backend=options["backend"],
@@ -98,6 +85,8 @@ def colour(ctx, image, **options):
 
 def check_colour_options(options):
     """Options of the shared set that have no meaning for colour separation are refused, not ignored."""
+    if options["init"] not in ("density", "uniform"):
+        raise StippleError("--init must be density or uniform for colour separation (a start CSV is for one class)")
     if options["invert"] or options["value_range"] is not None:
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
     if options["gamma"] != 1.0:

@@ -244,8 +244,10 @@ def test_sphere_objective_gradient_taylor_slope_two_with_near_field(rng):
     direction = manifold.project(points, rng.standard_normal(points.shape))
 
     def remainder(t):
-        return energy_at(objective, manifold.retract(points, t * direction)) - energy - t * np.dot(
-            gradient.ravel(), direction.ravel()
+        return (
+            energy_at(objective, manifold.retract(points, t * direction))
+            - energy
+            - t * np.dot(gradient.ravel(), direction.ravel())
         )
 
     assert taylor_slope(remainder, STEPS) == pytest.approx(2, abs=0.1)
