@@ -996,9 +996,13 @@ def format_report(report):
         f"E_N: {report['energy']:.6e}",
         f"E_N of i.i.d. samples (expected): {report['expected_iid_energy']:.6e}",
         f"ratio to i.i.d.: {report['energy_ratio_to_iid']:.4g}",
+        f"untruncated energy (with the near field): {report['untruncated_energy']:.6e}",
     ]
     for item in report.get("similarity", []):
-        lines.append(f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f}")
+        lines.append(
+            f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f} "
+            f"(dots binned into pixels first: PSNR {item['psnr_binned']:.2f} dB)"
+        )
     if "neighbour_distance_over_hexagonal" in report:
         stats = report["neighbour_distance_over_hexagonal"]
         lines.append("nearest neighbour / hexagonal spacing: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))

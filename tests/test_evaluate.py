@@ -56,7 +56,10 @@ def test_lattice_measures():
     # Square lattice spacing 1/k against hexagonal sqrt(2/(sqrt(3) M)): ratio (3/4)^(1/4) for every point.
     np.testing.assert_allclose(torus_neighbour_ratios(points, flat), (3 / 4) ** 0.25, rtol=1e-12)
     for item in report["similarity"]:
-        assert item["psnr"] == float("inf") and item["ssim"] == pytest.approx(1.0)
+        # One dot per pixel centre: binned, the dots are the image; blurred exactly, only the lattice's own
+        # frequency (1 cycle per pixel) is left, damped by exp(-2 pi² sigma²) < 3e-9.
+        assert item["psnr_binned"] == float("inf") and item["ssim"] == pytest.approx(1.0)
+        assert item["psnr"] > 150
 
 
 def test_lattice_power_spectrum_peaks_at_its_frequency():
@@ -263,3 +266,21 @@ def test_sphere_clumps_scale_with_the_density_and_skip_empty_cells():
     )
     report = evaluate_sphere(sphere_problem(cells, len(north), 8, threads=1), north, cells)
     assert report["neighbour_distance_over_hexagonal"]["p01"] > 0.8
+
+
+def test_exact_blurs_match_a_periodic_sum_of_gaussians():
+    """One dot blurred exactly is the periodic Gaussian around it; a constant image stays constant."""
+    from stipple.evaluate import exact_blurs
+
+    weights = np.full((20, 30), 0.4)
+    point = np.array([[0.31, 0.62]])
+    reference, test = exact_blurs(weights, point, sigma=2.0)
+    np.testing.assert_allclose(reference, 0.4, rtol=1e-9)
+    y, x = np.meshgrid((np.arange(20) + 0.5) / 20, (np.arange(30) + 0.5) / 30, indexing="ij")
+    sx, sy = 2.0 / 30, 2.0 / 20
+    expected = np.zeros_like(x)
+    for mx in range(-2, 3):
+        for my in range(-2, 3):
+            dx, dy = x - point[0, 0] + mx, y - point[0, 1] + my
+            expected += np.exp(-((dx / sx) ** 2 + (dy / sy) ** 2) / 2) / (2 * np.pi * sx * sy)
+    np.testing.assert_allclose(test, 0.4 * expected, rtol=1e-7, atol=1e-9)
