@@ -22,6 +22,7 @@ from .errors import StippleError
 from .halftone import MAX_POINTS, check_integer
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
+from .plotter import DOT_STYLES
 from .transforms import BACKENDS
 
 
@@ -212,7 +213,11 @@ def common_options(function):
             help="Sum the kernel's short range over neighbouring pairs: the untruncated discrepancy, no clumps "
             "(default; sphere: with the distance kernel). --no-near-field: the paper's bandlimited E_N.",
         ),
-        click.option("--invert", is_flag=True, help="Images: w = u (white dots on black); maps: w = 1 - map."),
+        click.option(
+            "--invert",
+            is_flag=True,
+            help="Dots on the light parts (images: w = u; maps: w = 1 - map), drawn white on black.",
+        ),
         click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
         click.option(
             "--range",
@@ -234,6 +239,7 @@ def common_options(function):
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
         click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
+        look_options,
         click.option(
             "--checkpoint",
             type=click.Path(dir_okay=False),
@@ -264,11 +270,85 @@ def load_input(source, **options):
     return load_density(source, **options)
 
 
-def render_settings(width, dot_radius, png_width):
+def look_options(function):
+    """Options of the drawing (SVG and PNG) shared by every command that draws dots."""
+    options = [
+        click.option(
+            "--background",
+            default=None,
+            help="Paper colour of SVG/PNG: #rrggbb, #rgb or a name (default white; black with --invert).",
+        ),
+        click.option(
+            "--color",
+            default=None,
+            help="Dot colour of SVG/PNG (default black; white with --invert).",
+        ),
+        click.option(
+            "--dot-style",
+            type=click.Choice(("disc",) + DOT_STYLES),
+            default="disc",
+            show_default=True,
+            help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
+            "previews the pen strokes.",
+        ),
+        click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width of the pen styles."),
+    ]
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def palette_options(default):
+    """``--palette``, ``--black`` and ``--union-weight``: colour separation into one class of dots per ink."""
+
+    def decorate(function):
+        options = [
+            click.option(
+                "--palette",
+                "--separation",
+                "palette",
+                default=default,
+                show_default=default is not None,
+                help="Inks: cmyk, cmy, gray (one black ink), or pen colours '#00a0e0,#e0007a,#ffe000,#000000' "
+                "(separated by non-negative least squares; README). One layer of dots per ink, optimised jointly.",
+            ),
+            click.option(
+                "--black",
+                type=click.FloatRange(0, 1),
+                default=1.0,
+                show_default=True,
+                help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
+            ),
+            click.option(
+                "--union-weight",
+                type=float,
+                default=1.0,
+                show_default=True,
+                help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
+            ),
+        ]
+        for option in reversed(options):
+            function = option(function)
+        return function
+
+    return decorate
+
+
+def render_settings(options):
+    """The drawing settings of the command's options: lengths parsed, colours resolved (``--invert``: white dots
+    on black unless ``--background`` / ``--color`` say otherwise)."""
+    from .outputs import BLACK, WHITE, parse_colour
+
+    invert = bool(options.get("invert"))
+    background, color = options.get("background"), options.get("color")
     return {
-        "width": parse_length(width, "width"),
-        "dot_radius": None if dot_radius is None else parse_length(dot_radius, "dot-radius"),
-        "png_width": png_width,
+        "width": parse_length(options["width"], "width"),
+        "dot_radius": None if options["dot_radius"] is None else parse_length(options["dot_radius"], "dot-radius"),
+        "png_width": options["png_width"],
+        "background": parse_colour(background, "background") if background else (BLACK if invert else WHITE),
+        "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
+        "dot_style": options["dot_style"],
+        "pen_width": parse_length(options["pen_width"], "pen-width"),
     }
 
 
@@ -403,9 +483,11 @@ def main():
     show_default=True,
     help="Hessian of the Newton step and Daniel's beta.",
 )
+@palette_options(None)
 @click.pass_context
 def torus(ctx, image, **options):
-    """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus."""
+    """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus; with --palette, one
+    layer of dots per ink (as 'stipple colour')."""
     from .outputs import torus_output
     from .torus import DEFAULT_EPSILON, torus_problem
 
@@ -413,8 +495,12 @@ def torus(ctx, image, **options):
     image = resolve_input(ctx, image)
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    if options["palette"] is not None:
+        from .cli_colour import run_colour
+
+        return run_colour(image, options, started)
     try:
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        settings = render_settings(options)
         inputs = [("image", image), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             weights = load_input(
@@ -579,7 +665,7 @@ def sphere(ctx, map_source, **options):
     started = time.perf_counter()
     map_source = resolve_input(ctx, map_source)
     try:
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
+        settings = render_settings(options)
         view = parse_view(options["view"])
         lon0 = check_longitude("lon0", options["lon0"])
         formats = [output_format(path) for path in options["outputs"]]
@@ -677,11 +763,16 @@ def read_sphere_init(init):
 MAX_PIXEL_COORDINATE = 2**31
 
 
-def read_points(source):
+LABEL_COLUMNS = ("layer", "color", "colour")
+
+
+def read_points(source, labels=False):
     """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``.
 
     The header decides: ``x,y,z`` and ``lon,lat`` are sphere points (latitudes in [-90, 90], no zero
-    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size).
+    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size). With
+    ``labels``, also each torus point's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes),
+    or None: ``(domain, points, names)``.
     """
     from .inputs import read_points_csv, read_source
     from .sphere import from_lon_lat
@@ -700,12 +791,14 @@ def read_points(source):
         return points
 
     if {"x", "y", "z"} <= columns:
-        return "sphere", unit_rows(table(("x", "y", "z")), name)
+        found = "sphere", unit_rows(table(("x", "y", "z")), name)
+        return (*found, None) if labels else found
     if {"lon", "lat"} <= columns:
         longitude, latitude = table(("lon", "lat")).T
         if np.any(np.abs(latitude) > 90):
             raise StippleError(f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(latitude).max():g}")
-        return "sphere", from_lon_lat(longitude, latitude)
+        found = "sphere", from_lon_lat(longitude, latitude)
+        return (*found, None) if labels else found
     if {"x", "y"} <= columns:
         pixels = table(("x", "y"))
         if np.abs(pixels).max() >= MAX_PIXEL_COORDINATE:
@@ -713,8 +806,23 @@ def read_points(source):
                 f"{name}: x,y must be pixel positions below {MAX_PIXEL_COORDINATE} in size, "
                 f"not {np.abs(pixels).max():g}"
             )
-        return "torus", pixels
+        if not labels:
+            return "torus", pixels
+        return "torus", pixels, read_labels(data, columns, len(pixels), name)
     raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+
+
+def read_labels(data, columns, count, name):
+    """Each row's layer name from the ``layer`` / ``color`` column of CSV ``data``, or None without one."""
+    column = next((label for label in LABEL_COLUMNS if label in columns), None)
+    if column is None:
+        return None
+    lines = [line.strip() for line in data.decode("utf-8-sig").splitlines() if line.strip()]
+    index = [cell.strip().lower() for cell in lines[0].split(",")].index(column)
+    names = [line.split(",")[index].strip() for line in lines[1:]]
+    if len(names) != count or not all(names):
+        raise StippleError(f"{name}: every row needs a {column} name")
+    return np.array(names)
 
 
 def unit_rows(vectors, name):
@@ -751,15 +859,17 @@ def unit_rows(vectors, name):
     "--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True, help="Sphere PNG view."
 )
 @click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
+@click.option("--invert", is_flag=True, help="Draw white dots on black.")
+@look_options
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
-def render(points_source, outputs, like, size, width, dot_radius, png_width, order, coords, projection, view, quiet):
+def render(points_source, outputs, like, size, coords, projection, view, **options):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     from .outputs import sphere_output, torus_output
     from .sphere import lon_lat
 
-    options = {"order": order, "quiet": quiet}
+    png_width = options["png_width"]
     try:
-        settings = render_settings(width, dot_radius, png_width)
+        settings = render_settings(options)
         angles = parse_view(view)
         formats = [output_format(path) for path in outputs]
         with guarded_files([("points", points_source), ("--like image", like)], outputs):
@@ -820,6 +930,13 @@ def torus_canvas(pixels, like, size):
 @click.option("--invert", is_flag=True, help="As for the run.")
 @click.option("--gamma", type=float, default=1.0, show_default=True, help="As for the run.")
 @click.option("--range", "value_range", type=(float, float), default=None, help="As for the run.")
+@click.option(
+    "--palette",
+    default="cmyk",
+    show_default=True,
+    help="Layered CSVs (x,y,layer or x,y,color): the run's --palette, to separate INPUT into its inks.",
+)
+@click.option("--black", type=click.FloatRange(0, 1), default=1.0, show_default=True, help="As for the run (cmyk).")
 @click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
 @click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
 @click.option("--line", "as_line", is_flag=True, help="POINTS are the vertices of one closed line (stipple line).")
@@ -833,16 +950,26 @@ def evaluate(
     invert,
     gamma,
     value_range,
+    palette,
+    black,
     json_path,
     spectrum_path,
     as_line,
 ):
-    """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform)."""
+    """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
+    CSVs per ink and for all dots together."""
     import json
 
     from .outputs import commit_outputs, spectrum_plot
 
-    options = {"uniform": uniform, "invert": invert, "gamma": gamma, "value_range": value_range}
+    options = {
+        "uniform": uniform,
+        "invert": invert,
+        "gamma": gamma,
+        "value_range": value_range,
+        "palette": palette,
+        "black": black,
+    }
     try:
         options["lon0"] = check_longitude("lon0", lon0)
         check_extension("--json", json_path, ".json")
@@ -852,13 +979,15 @@ def evaluate(
         reports = [(role, path) for role, path in (("--json", json_path), ("--spectrum", spectrum_path)) if path]
         reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
         with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
-            domain, points = read_points(points_source)
+            domain, points, names = read_points(points_source, labels=True)
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
             if spectrum_path is not None and (domain != "torus" or as_line):
                 raise StippleError("--spectrum is for torus points only")
             if as_line:
                 report = evaluate_line_points(points, domain, input_source, bandwidth, options)
+            elif names is not None:
+                report = evaluate_layers(points, names, input_source, bandwidth, options)
             else:
                 report = evaluate_points(domain, points, input_source, bandwidth, kernel, options)
             files = []
@@ -917,6 +1046,42 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     return evaluate_sphere(problem, points, density)
 
 
+def evaluate_layers(pixels, names, input_source, bandwidth, options):
+    """The report of all dots against the inks' summed density, with ``classes``: each ink's dots against its
+    own density (its count beside its quota ``M · mass share``)."""
+    from .colour import parse_palette, separate
+    from .evaluate import evaluate_torus
+    from .inputs import load_colour
+    from .multiclass import class_bandwidth
+    from .torus import torus_problem
+
+    if input_source is None:
+        raise StippleError("missing INPUT: the colour image the layered points were made from")
+    rgb = load_colour(input_source)
+    layers = separate(rgb, parse_palette(options["palette"]), options["black"])
+    unknown = sorted(set(names.tolist()) - {layer.name for layer in layers})
+    if unknown:
+        inks = ", ".join(layer.name for layer in layers)
+        raise StippleError(f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} ({inks})")
+    rows, columns = rgb.shape[:2]
+    unit = np.mod(pixels / np.array([columns, rows]), 1.0)
+    union = sum(layer.density for layer in layers)
+    report = evaluate_torus(torus_problem(union, len(unit), bandwidth, epsilon=1e-10), unit, union)
+    report["classes"] = []
+    for layer in layers:
+        chosen = names == layer.name
+        count, share = int(chosen.sum()), float(layer.density.sum() / union.sum())
+        entry = {"name": layer.name, "points": count, "mass_share": share, "quota": share * len(unit)}
+        if count >= 2:
+            band = None if bandwidth is None else class_bandwidth(bandwidth, count, len(unit))
+            problem = torus_problem(layer.density, count, band, epsilon=1e-10)
+            measured = evaluate_torus(problem, unit[chosen], layer.density)
+            entry.update({key: measured[key] for key in ("bandwidth", "energy", "energy_ratio_to_iid")})
+            entry["neighbour_distance_over_hexagonal"] = measured.get("neighbour_distance_over_hexagonal")
+        report["classes"].append(entry)
+    return report
+
+
 def format_report(report):
     """The evaluation as aligned ``name: value`` lines (the spectrum only as its range)."""
     lines = [
@@ -940,6 +1105,14 @@ def format_report(report):
     for key in ("max_coefficient_error", "minimum_separation_degrees", "cap_discrepancy"):
         if key in report:
             lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
+    for item in report.get("classes", []):
+        line = f"ink {item['name']}: {item['points']} dots (quota {item['quota']:.2f})"
+        if "energy_ratio_to_iid" in item:
+            line += f", N {item['bandwidth']}, ratio to i.i.d. {item['energy_ratio_to_iid']:.4g}"
+        stats = item.get("neighbour_distance_over_hexagonal") or {}
+        if stats:
+            line += ", NN / hexagonal " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
+        lines.append(line)
     return "\n".join(lines)
 
 

@@ -8,52 +8,22 @@ from .cli import (
     common_options,
     finish,
     guarded_files,
+    palette_options,
     physical_centres,
     plot_order,
     render_settings,
     solve,
     write_outputs,
 )
-from .colour import SEPARATIONS
 from .errors import StippleError
-from .outputs import output_format, parse_length
-from .plotter import DOT_STYLES
+from .outputs import output_format
 from .transforms import BACKENDS
 
 
 @click.command()
 @click.argument("image", required=False)
 @common_options
-@click.option(
-    "--separation",
-    type=click.Choice(SEPARATIONS),
-    default="cmyk",
-    show_default=True,
-    help="Inks: cyan, magenta, yellow and black; no black; or one black ink (1 - luminance).",
-)
-@click.option(
-    "--black",
-    type=click.FloatRange(0, 1),
-    default=1.0,
-    show_default=True,
-    help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
-)
-@click.option(
-    "--union-weight",
-    type=float,
-    default=1.0,
-    show_default=True,
-    help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
-)
-@click.option(
-    "--dot-style",
-    type=click.Choice(("disc",) + DOT_STYLES),
-    default="disc",
-    show_default=True,
-    help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
-    "previews the pen strokes.",
-)
-@click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width for the pen-path styles.")
+@palette_options("cmyk")
 @click.option("--init", type=click.Choice(("density", "uniform")), default="density", show_default=True)
 @click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
 @click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
@@ -61,19 +31,26 @@ from .transforms import BACKENDS
 def colour(ctx, image, **options):
     """Stipple a colour IMAGE with one layer of dots per ink (CSV x,y,layer; SVG one layer per pen)."""
     from .cli import resolve_input
-    from .colour import colour_problem
-    from .inputs import load_colour
-    from .outputs import layered_torus_output
-    from .torus import DEFAULT_EPSILON
 
     started = time.perf_counter()
     image = resolve_input(ctx, image)
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    run_colour(image, options, started)
+
+
+def run_colour(image, options, started):
+    """Separate, optimise jointly and write one layer per ink (``stipple colour``, ``stipple torus --palette``)."""
+    from .colour import colour_problem, parse_palette
+    from .inputs import load_colour
+    from .outputs import layered_torus_output
+    from .torus import DEFAULT_EPSILON
+
     try:
         check_colour_options(options)
-        settings = render_settings(options["width"], options["dot_radius"], options["png_width"])
-        pen_width = parse_length(options["pen_width"])
+        palette = parse_palette(options["palette"])
+        settings = render_settings(options)
+        settings.pop("color")
         with guarded_files([("image", image)], options["outputs"], options["checkpoint"]):
             rgb = load_colour(image)
             check_png(options, rgb.shape[1::-1])
@@ -81,7 +58,7 @@ def colour(ctx, image, **options):
                 rgb,
                 options["n_points"],
                 options["bandwidth"],
-                separation=options["separation"],
+                separation=palette,
                 black=options["black"],
                 union_weight=options["union_weight"],
                 backend=options["backend"],
@@ -99,9 +76,7 @@ def colour(ctx, image, **options):
             ink = sum(layer.density for layer in layers).mean()
             write_outputs(
                 options["outputs"],
-                lambda fmt: layered_torus_output(
-                    placed, shape, fmt, ink=ink, dot_style=options["dot_style"], pen_width=pen_width, **settings
-                ),
+                lambda fmt: layered_torus_output(placed, shape, fmt, ink=ink, **settings),
             )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
@@ -110,10 +85,14 @@ def colour(ctx, image, **options):
 
 def check_colour_options(options):
     """Options of the shared set that have no meaning for colour separation are refused, not ignored."""
+    if options["init"] not in ("density", "uniform"):
+        raise StippleError("--init must be density or uniform for colour separation (a start CSV is for one class)")
     if options["invert"] or options["value_range"] is not None:
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
     if options["gamma"] != 1.0:
         raise StippleError("--gamma is for gray images and maps, not colour separation")
+    if options["color"] is not None or options["background"] is not None:
+        raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 
 
 def check_png(options, canvas):

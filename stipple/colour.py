@@ -4,9 +4,18 @@ Inks are subtractive and dots do not overlap, so the coverages of the classes ad
 are ``c = 1 - R``, ``m = 1 - G``, ``y = 1 - B``; with black (``cmyk``) the grey component
 ``k = black * min(c, m, y)`` is taken out of all three (grey-component replacement, ``black = 1``: all of it).
 The union of the classes then has the density ``c + m + y + k`` (``cmyk``) or ``c + m + y`` (``cmy``).
+
+A palette of pen colours ``p_k`` (RGB reflectances in [0, 1]) is separated in the same subtractive model of
+dots that do not overlap (Murray-Davies / Neugebauer with the pens as the only primaries): paper of
+reflectance 1 with coverages ``a_k`` reflects ``1 - sum_k a_k (1 - p_k)`` in each channel, so a pixel's
+absorptance ``1 - rgb`` is ``A a`` with the columns ``A_k = 1 - p_k``. Per pixel, ``a >= 0`` minimises
+``|A a - (1 - rgb)|^2 + TIE_BREAK * (sum_k a_k)^2`` (non-negative least squares; the small second term picks the
+least ink among equal fits, so grey takes the black pen rather than three colours), and coverages adding up to
+more than 1 are scaled down to 1. With the pens cyan, magenta, yellow and black this is close to ``cmyk``.
 """
 
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
 
@@ -22,6 +31,60 @@ INK_COLOURS = {
     "black": (0.0, 0.0, 0.0),
 }
 _LUMA = np.array([0.299, 0.587, 0.114])
+TIE_BREAK = 1e-3
+MAX_PENS = 8
+MIN_ABSORPTANCE = 0.05
+
+
+def parse_palette(text):
+    """``cmyk``, ``cmy``, ``gray`` or a comma-separated list of pen colours (``#00a0e0``, ``#fff``, CSS names).
+
+    Returns the separation's name, or a list of ``(name, rgb)`` pens (the name is the colour as given).
+    """
+    from .outputs import parse_colour
+
+    text = str(text).strip()
+    if text.lower() in SEPARATIONS:
+        return text.lower()
+    names = [part.strip() for part in text.split(",")]
+    if not 1 <= len(names) <= MAX_PENS or not all(names):
+        raise StippleError(
+            f"palette must be one of {', '.join(SEPARATIONS)} or 1 to {MAX_PENS} comma-separated pen colours, "
+            f"not {text!r}"
+        )
+    pens = [(name, parse_colour(name, "palette colour")) for name in names]
+    for name, rgb in pens:
+        if np.max(1.0 - np.asarray(rgb)) < MIN_ABSORPTANCE:
+            raise StippleError(f"palette colour {name!r} is too close to the white paper to draw with")
+    if len({rgb for _, rgb in pens}) < len(pens):
+        raise StippleError(f"palette colours must differ from each other, not {text!r}")
+    return pens
+
+
+def pen_coverages(rgb, pens):
+    """Per-pixel coverage of each pen (see the module's docstring): an ``(H, W, K)`` array in [0, 1].
+
+    Exact non-negative least squares, vectorised: the solution is the unconstrained least-squares fit on its
+    support, so every support (at most ``2**K - 1`` of them) is solved for all pixels at once and each pixel
+    keeps the best fit that is non-negative.
+    """
+    absorb = 1.0 - np.asarray([colour for _, colour in pens], dtype=np.float64).T  # (3, K)
+    system = np.vstack([absorb, np.sqrt(TIE_BREAK) * np.ones((1, absorb.shape[1]))])  # (4, K)
+    target = np.concatenate([1.0 - rgb.reshape(-1, 3), np.zeros((rgb.shape[0] * rgb.shape[1], 1))], axis=1).T
+    best = np.zeros((absorb.shape[1], target.shape[1]))
+    best_residual = np.sum(target**2, axis=0)
+    for size in range(1, absorb.shape[1] + 1):
+        for support in combinations(range(absorb.shape[1]), size):
+            columns = system[:, support]
+            fit = np.linalg.lstsq(columns, target, rcond=None)[0]
+            residual = np.sum((columns @ fit - target) ** 2, axis=0)
+            better = np.all(fit >= -1e-12, axis=0) & (residual < best_residual - 1e-15)
+            best[:, better] = 0.0
+            best[np.ix_(support, better.nonzero()[0])] = np.maximum(fit[:, better], 0.0)
+            best_residual = np.where(better, residual, best_residual)
+    coverage = best.T.reshape(rgb.shape[0], rgb.shape[1], -1)
+    total = coverage.sum(axis=2, keepdims=True)
+    return np.clip(coverage / np.maximum(total, 1.0), 0.0, 1.0)
 
 
 @dataclass
@@ -40,22 +103,27 @@ def separate(rgb, separation="cmyk", black=1.0):
     ----------
     rgb : numpy.ndarray
         ``(H, W, 3)`` array of red, green and blue in [0, 1].
-    separation : {"cmyk", "cmy", "gray"}
-        Inks: cyan, magenta, yellow and black; the three colours only; or one black ink of density
-        ``1 - luminance`` (Rec. 601), the classic single-class stipple.
+    separation : {"cmyk", "cmy", "gray"} or list of (name, rgb)
+        Inks: cyan, magenta, yellow and black; the three colours only; one black ink of density
+        ``1 - luminance`` (Rec. 601), the classic single-class stipple; or pens (``parse_palette``), separated by
+        ``pen_coverages``.
     black : float
         Fraction in [0, 1] of the grey component ``min(c, m, y)`` that black replaces (``cmyk`` only).
 
     Returns
     -------
     list of Layer
-        One layer per ink, in the order cyan, magenta, yellow, black; inks with no mass are left out.
+        One layer per ink, in the order cyan, magenta, yellow, black (or the pens'); inks with no mass are left out.
     """
     rgb = np.asarray(rgb, dtype=np.float64)
     if rgb.ndim != 3 or rgb.shape[2] != 3:
         raise StippleError(f"colour image must have shape (H, W, 3), not {rgb.shape}")
     if not np.all(np.isfinite(rgb)) or rgb.min() < 0 or rgb.max() > 1:
         raise StippleError("colour values must be finite and in [0, 1]")
+    if not isinstance(separation, str):
+        coverage = pen_coverages(rgb, separation)
+        layers = [Layer(name, colour, coverage[..., k]) for k, (name, colour) in enumerate(separation)]
+        return _with_mass(layers)
     if separation not in SEPARATIONS:
         raise StippleError(f"separation must be one of {', '.join(SEPARATIONS)}, not {separation!r}")
     if not 0 <= black <= 1:
@@ -67,11 +135,20 @@ def separate(rgb, separation="cmyk", black=1.0):
         grey = black * inks.min(axis=2) if separation == "cmyk" else np.zeros(rgb.shape[:2])
         densities = {name: inks[..., index] - grey for index, name in enumerate(("cyan", "magenta", "yellow"))}
         densities["black"] = grey
-    layers = [Layer(name, INK_COLOURS[name], np.maximum(value, 0.0)) for name, value in densities.items()]
+    return _with_mass([Layer(name, INK_COLOURS[name], np.maximum(value, 0.0)) for name, value in densities.items()])
+
+
+def _with_mass(layers):
+    """The layers that have ink; an error if none has."""
     layers = [layer for layer in layers if layer.density.sum() > 0]
     if not layers:
         raise StippleError("the image is blank (all white): there is nothing to place dots on")
     return layers
+
+
+def palette_label(separation):
+    """The separation as text: its name, or the pens' colours joined by commas (for checkpoints and notes)."""
+    return separation if isinstance(separation, str) else ",".join(name for name, _ in separation)
 
 
 def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.0, union_weight=1.0, **options):
@@ -112,7 +189,7 @@ def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.
         term_weights=term_weights,
         **options,
     )
-    problem.settings.update(separation=separation, black=float(black))
+    problem.settings.update(separation=palette_label(separation), black=float(black))
     return [layer for layer in layers if layer.name in problem.names], problem
 
 

@@ -12,6 +12,7 @@ import tempfile
 import numpy as np
 from PIL import Image, ImageDraw
 
+from .drawing import Dots, angular_distances, capped_radii, ellipse_polygon, flat_dots, globe_dots, inset, squash_paths
 from .errors import StippleError
 
 FORMATS = (".csv", ".svg", ".png", ".geojson", ".json")
@@ -192,27 +193,6 @@ def csv_bytes(columns, names, number_format=".6f"):
     return ("\n".join(lines) + "\n").encode()
 
 
-def svg_bytes(centres, size, physical_width, radius, comment=""):
-    """Filled circles at ``centres`` in a ``size = (width, height)`` user-unit canvas.
-
-    ``physical_width`` is ``(value, unit)``; ``radius`` in user units.
-    """
-    width, height = size
-    value, unit = physical_width
-    physical_height = value * height / width
-    parts = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{value:g}{unit}" height="{physical_height:.6g}{unit}" '
-        f'viewBox="0 0 {width:g} {height:g}">',
-    ]
-    if comment:
-        parts.append(f"<!-- {comment} -->")
-    parts.append('<g fill="black" stroke="none">')
-    parts.extend(f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{radius:.4f}"/>' for x, y in centres)
-    parts.append("</g>\n</svg>\n")
-    return "\n".join(parts).encode()
-
-
 MAX_CANVAS_SIDE = 1 << 20
 
 
@@ -245,25 +225,6 @@ def check_png_canvas(size, pixels_wide, layers=2):
             f"{picture} needs about {needed / 2**30:.1f} GiB of memory to draw, more than the "
             f"{available / 2**30:.1f} GiB available: use a smaller --png-width, or SVG"
         )
-
-
-def render_dots(centres, size, pixels_wide, radius, background=None):
-    """An antialiased grayscale PNG of black discs on white (or on ``background``, a PIL image).
-
-    ``centres`` and ``radius`` are in user units of a canvas of ``size = (width, height)``; the picture
-    is ``pixels_wide`` pixels wide, drawn at 4× and reduced with a box filter. The canvas's memory is
-    checked before it is allocated.
-    """
-    check_png_canvas(size, pixels_wide)
-    scale, canvas_size = png_canvas(size, pixels_wide)
-    canvas = Image.new("L", canvas_size, 255)
-    if background is not None:
-        canvas.paste(background.resize(canvas_size, Image.BILINEAR))
-    draw = ImageDraw.Draw(canvas)
-    r = max(radius * scale, 0.5)
-    for x, y in np.asarray(centres) * scale:
-        draw.ellipse((x - r, y - r, x + r, y + r), fill=0)
-    return canvas.reduce(SUPERSAMPLE)
 
 
 def png_bytes(image):
@@ -304,114 +265,35 @@ def check_png_outputs(formats, canvas, png_width, count):
         check_png_canvas(canvas, png_width or default_png_width(count))
 
 
-def torus_output(points, shape, fmt, *, width=(200.0, "mm"), dot_radius=None, png_width=None, ink=None):
-    """Bytes of torus ``points`` (unit coordinates) in ``fmt`` for an image of ``shape = (H, W)``.
-
-    CSV is ``x,y`` in pixel units (origin top-left, y down). SVG and PNG draw discs of
-    ``dot_radius`` (physical ``(value, unit)``) or, by default, of the radius at which the dots' ink
-    equals ``ink`` (the density's mean, 0..1; half the image if unknown).
-    """
-    rows, columns = shape
-    pixels = points * np.array([columns, rows])
-    if fmt == ".csv":
-        return csv_bytes([pixels[:, 0], pixels[:, 1]], ["x", "y"])
-    if fmt in (".geojson", ".json"):
-        raise StippleError("GeoJSON output is for sphere points")
-    if dot_radius is None:
-        radius = ink_radius((0.5 if ink is None else ink) * rows * columns, len(points))
-    else:
-        radius = to_user_units(dot_radius, width, columns)
-    if fmt == ".svg":
-        return svg_bytes(pixels, (columns, rows), width, radius, comment=f"{len(points)} dots")
-    return png_bytes(render_dots(pixels, (columns, rows), png_width or default_png_width(len(points)), radius))
-
-
 ORTHO_SIZE = 1000.0
 PROJECTIONS = ("ortho", "equirect")
 
 
 def sphere_canvas(projection, fmt=".png"):
-    """``(width, height)`` in user units of a sphere picture: the equirectangular map or the globe."""
-    if projection == "equirect" and fmt == ".png":
+    """``(width, height)`` in user units of a sphere picture (SVG or PNG): the equirectangular map or the globe."""
+    if projection == "equirect":
         return (ORTHO_SIZE * 2, ORTHO_SIZE)
     return (ORTHO_SIZE, ORTHO_SIZE)
 
 
+GLOBE = 0.98  # the globe's radius over half the canvas
+
+
 def orthographic(points, view):
-    """Canvas positions (``ORTHO_SIZE`` square, y down) and visibility of unit vectors seen from ``view``."""
+    """Canvas positions (``ORTHO_SIZE`` square, y down) of unit vectors seen from ``view``, and their depth
+    (cosine of the angle from the view's centre; positive on the visible side)."""
     lon, lat = np.radians(view)
     centre = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
     east = np.array([-np.sin(lon), np.cos(lon), 0.0])
     north = np.cross(centre, east)
     half = ORTHO_SIZE / 2
-    xy = np.stack([half + 0.98 * half * (points @ east), half - 0.98 * half * (points @ north)], axis=1)
-    return xy, points @ centre > 0
+    xy = np.stack([half + GLOBE * half * (points @ east), half - GLOBE * half * (points @ north)], axis=1)
+    return xy, points @ centre
 
 
 def equirectangular(longitude, latitude, width):
     """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, lon -180 at the left."""
     return np.stack([(longitude + 180) / 360 * width, (90 - latitude) / 180 * width / 2], axis=1)
-
-
-def sphere_output(
-    points,
-    lon_lat,
-    fmt,
-    *,
-    coords="lonlat",
-    projection="ortho",
-    view=(0.0, 0.0),
-    width=(200.0, "mm"),
-    dot_radius=None,
-    png_width=None,
-    ink=None,
-):
-    """Bytes of sphere ``points`` (unit vectors; ``lon_lat`` their degrees) in ``fmt``.
-
-    CSV is ``lon,lat`` in degrees or ``x,y,z``; GeoJSON a MultiPoint; SVG the orthographic front
-    hemisphere around ``view = (lon, lat)``; PNG that view or the equirectangular map. Discs have
-    ``dot_radius`` (physical) or by default the radius at which the dots' ink equals ``ink`` of the sphere.
-    """
-    longitude, latitude = lon_lat
-    if fmt == ".csv":
-        if coords == "xyz":
-            return csv_bytes(list(points.T), ["x", "y", "z"], number_format=".17g")
-        # Round-trip digits: 6 decimals of a degree would cap a spherical design's error near 6e-8.
-        return csv_bytes([longitude, latitude], ["lon", "lat"], number_format=".17g")
-    if fmt in (".geojson", ".json"):
-        return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
-    angular_radius = 2 * np.sqrt((0.5 if ink is None else ink) / len(points))
-    canvas = sphere_canvas(projection, fmt)
-    if projection == "equirect" and fmt == ".png":
-        centres = equirectangular(longitude, latitude, canvas[0])
-        radius = angular_radius * canvas[0] / (2 * np.pi)
-    else:
-        centres, visible = orthographic(points, view)
-        centres = centres[visible]
-        radius = angular_radius * 0.98 * ORTHO_SIZE / 2
-    if dot_radius is not None:
-        radius = to_user_units(dot_radius, width, canvas[0])
-    if fmt == ".svg":
-        return svg_bytes(centres, canvas, width, radius, comment=f"{len(centres)} of {len(points)} dots, front")
-    return png_bytes(
-        render_dots(
-            centres,
-            canvas,
-            png_width or default_png_width(len(points)),
-            radius,
-            background=_globe_background(canvas) if projection == "ortho" else None,
-        )
-    )
-
-
-def _globe_background(canvas):
-    """A light disc marking the globe's outline."""
-    image = Image.new("L", (int(canvas[0]), int(canvas[1])), 255)
-    half = ORTHO_SIZE / 2
-    ImageDraw.Draw(image).ellipse(
-        (half * 0.02, half * 0.02, ORTHO_SIZE - half * 0.02, ORTHO_SIZE - half * 0.02), fill=235
-    )
-    return image
 
 
 def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
@@ -520,12 +402,26 @@ def path_data(path):
     return "M" + " L".join(f"{z.real:.4f},{z.imag:.4f}" for z in path)
 
 
-def layered_svg_bytes(layers, size, physical_width, radius=None, pen_width=None):
-    """SVG with one Inkscape layer (``<g>``) per ``(name, colour, centres, paths)`` in ``layers``.
+WHITE, BLACK = (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)
 
-    Layers without ``paths`` are filled circles of ``radius``; with ``paths`` (pen paths from
-    ``stipple.plotter.dot_paths``) they are stroked polylines ``pen_width`` wide. All in user units of a
-    ``size = (width, height)`` canvas; ``physical_width`` is ``(value, unit)``.
+
+def parse_colour(text, name="color"):
+    """``#rrggbb``, ``#rgb`` or a CSS colour name (``white``, ``navy``) -> RGB in [0, 1]."""
+    from PIL import ImageColor
+
+    try:
+        rgb = ImageColor.getrgb(str(text).strip())
+    except ValueError:
+        raise StippleError(f"{name} must be a colour such as #1a2b3c, #fff or white, not {text!r}") from None
+    return tuple(channel / 255 for channel in rgb[:3])
+
+
+def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=None, notes=()):
+    """SVG of ``Dots`` layers, one Inkscape layer each, on a ``size = (width, height)`` user-unit canvas.
+
+    Round dots are circles, foreshortened ones ellipses, pen-drawn ones stroked paths ``pen_width`` wide.
+    Filled dots also carry a stroke of their colour (width 0), so that ``vpype read`` keeps each layer's pen
+    colour. ``notes`` become comments and the ``<desc>``; a background other than white is a filled rectangle.
     """
     width, height = size
     value, unit = physical_width
@@ -534,44 +430,128 @@ def layered_svg_bytes(layers, size, physical_width, radius=None, pen_width=None)
         f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
         f'width="{value:g}{unit}" height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
     ]
-    for index, (name, colour, centres, paths) in enumerate(layers, start=1):
-        label = f'id="layer{index}" inkscape:groupmode="layer" inkscape:label="{index}-{name}"'
-        if paths is None:
-            parts.append(f'<g {label} fill="{hex_colour(colour)}" stroke="none">')
-            parts.extend(f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{radius:.4f}"/>' for x, y in centres)
-        else:
-            parts.append(
-                f'<g {label} fill="none" stroke="{hex_colour(colour)}" stroke-width="{pen_width:.4f}" '
-                'stroke-linecap="round" stroke-linejoin="round">'
-            )
-            parts.extend(f'<path d="{path_data(path)}"/>' for path in paths)
-        parts.append("</g>")
+    parts.extend(f"<!-- {note} -->" for note in notes)
+    if notes:
+        parts.append(f"<desc>{'; '.join(notes)}</desc>")
+    if tuple(background) != WHITE:
+        parts.append(f'<rect x="0" y="0" width="{width:g}" height="{height:g}" fill="{hex_colour(background)}"/>')
+    for index, dots in enumerate(layers, start=1):
+        parts.append(_svg_layer(index, dots, pen_width))
     parts.append("</svg>\n")
     return "\n".join(parts).encode()
 
 
-def render_layers(layers, size, pixels_wide, radius=None, pen_width=None):
-    """An RGB picture of inks on white paper: each layer's coverage (discs, or its pen paths stroked
-    ``pen_width`` wide) multiplies the paper by the ink's colour, so overlapping cyan and yellow print green."""
-    width, height = size
-    scale = pixels_wide / width * SUPERSAMPLE
-    canvas_size = (int(round(width * scale)), int(round(height * scale)))
-    picture = np.ones((canvas_size[1], canvas_size[0], 3))
-    for _, colour, centres, paths in layers:
+def _svg_layer(index, dots, pen_width):
+    colour = hex_colour(dots.colour)
+    label = f'id="layer{index}" inkscape:groupmode="layer" inkscape:label="{index}-{dots.name}"'
+    if dots.paths is not None:
+        head = (
+            f'<g {label} fill="none" stroke="{colour}" stroke-width="{pen_width:.4f}" '
+            'stroke-linecap="round" stroke-linejoin="round">'
+        )
+        body = [f'<path d="{path_data(path)}"/>' for path in dots.paths]
+    elif dots.squash is None:
+        head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
+        body = [
+            f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{r:.4f}"/>'
+            for (x, y), r in zip(dots.centres, dots.radii, strict=True)
+        ]
+    else:
+        head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
+        body = [
+            f'<ellipse cx="{x:.4f}" cy="{y:.4f}" rx="{r * s:.4f}" ry="{r:.4f}" '
+            f'transform="rotate({np.degrees(a):.2f} {x:.4f} {y:.4f})"/>'
+            for (x, y), r, s, a in zip(dots.centres, dots.radii, dots.squash, dots.angle, strict=True)
+        ]
+    return "\n".join([head, *body, "</g>"])
+
+
+def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=None, blend="over", underlay=None):
+    """An antialiased PNG picture (``PIL.Image``) of ``Dots`` layers, drawn at 4× and box-filtered.
+
+    ``blend`` "over" paints each layer's colour over what is below (one ink on any background); "multiply"
+    prints inks on paper (overlapping cyan and yellow make green). ``underlay(draw, scale)`` may draw on a
+    coverage mask first (the globe's outline), which is painted 8 % of the way from the background to the
+    first layer's colour. The picture is grayscale when every colour is a gray.
+    """
+    check_png_canvas(size, pixels_wide)
+    scale, canvas_size = png_canvas(size, pixels_wide)
+    picture = np.empty((canvas_size[1], canvas_size[0], 3))
+    picture[:] = background
+    if underlay is not None and layers:
         mask = Image.new("L", canvas_size, 0)
-        draw = ImageDraw.Draw(mask)
-        if paths is None:
-            r = max(radius * scale, 0.5)
-            for x, y in np.asarray(centres) * scale:
-                draw.ellipse((x - r, y - r, x + r, y + r), fill=255)
-        else:
-            stroke = max(int(round(pen_width * scale)), 1)
-            for path in paths:
-                draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
-        coverage = np.asarray(mask, dtype=np.float64)[..., None] / 255.0
-        picture *= 1.0 - coverage * (1.0 - np.asarray(colour))
-    image = Image.fromarray(np.round(picture * 255).astype(np.uint8), "RGB")
+        underlay(ImageDraw.Draw(mask), scale)
+        coverage = np.asarray(mask, dtype=np.float64)[..., None] / 255.0 * 0.08
+        picture += coverage * (np.asarray(layers[0].colour) - picture)
+    for dots in layers:
+        coverage = np.asarray(_coverage(dots, canvas_size, scale, pen_width), dtype=np.float64)[..., None] / 255.0
+        colour = np.asarray(dots.colour)
+        target = picture * colour if blend == "multiply" else colour
+        picture += coverage * (target - picture)
+    image = Image.fromarray(np.round(np.clip(picture, 0, 1) * 255).astype(np.uint8), "RGB")
+    if all(len(set(c)) == 1 for c in [tuple(background)] + [tuple(d.colour) for d in layers]):
+        image = image.convert("L")
     return image.reduce(SUPERSAMPLE)
+
+
+def _coverage(dots, canvas_size, scale, pen_width):
+    """A mask (``PIL.Image`` "L") of the ink of one layer of dots on the supersampled canvas."""
+    mask = Image.new("L", canvas_size, 0)
+    draw = ImageDraw.Draw(mask)
+    if dots.paths is not None:
+        stroke = max(int(round(pen_width * scale)), 1)
+        for path in dots.paths:
+            draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
+    elif dots.squash is None:
+        for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 0.5), strict=True):
+            draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=255)
+    else:
+        for centre, radius, squash, angle in zip(
+            dots.centres * scale, dots.radii * scale, dots.squash, dots.angle, strict=True
+        ):
+            draw.polygon(
+                ellipse_polygon(centre, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
+            )
+    return mask
+
+
+def with_pen_paths(layers, dot_style, pen):
+    """The layers with pen paths (``stipple.plotter.dot_paths``) for a pen style; unchanged for "disc"."""
+    from .plotter import dot_paths
+
+    if dot_style == "disc":
+        return layers
+    for dots in layers:
+        dots.paths = squash_paths(dot_paths(dots.centres, dots.radii, dot_style, pen), dots)
+    return layers
+
+
+def _look(width, columns, dot_radius, dot_style, pen_width):
+    """The fixed radius (user units, or None for the default) and the pen width in user units."""
+    radius = None if dot_radius is None else to_user_units(dot_radius, width, columns)
+    pen = to_user_units(pen_width, width, columns)
+    return radius, (pen if dot_style != "disc" else None), pen
+
+
+def draw_layers(layers, fmt, size, *, width, png_width, count, pen, background=WHITE, blend="over", notes=()):
+    """SVG or PNG bytes of ``Dots`` layers."""
+    if fmt == ".svg":
+        return svg_document(layers, size, width, background=background, pen_width=pen, notes=notes)
+    picture = render_picture(
+        layers, size, png_width or default_png_width(count), background=background, pen_width=pen, blend=blend
+    )
+    return png_bytes(picture)
+
+
+def torus_output(points, shape, fmt, **options):
+    """Bytes of torus ``points`` (unit coordinates) in ``fmt`` for an image of ``shape = (H, W)``: one layer
+    of dots in ``color`` on ``background`` (see ``layered_torus_output``; CSV is ``x,y`` in pixels)."""
+    if fmt == ".csv":
+        rows, columns = shape
+        pixels = points * np.array([columns, rows])
+        return csv_bytes([pixels[:, 0], pixels[:, 1]], ["x", "y"])
+    color = options.pop("color", BLACK)
+    return layered_torus_output([("dots", color, points)], shape, fmt, blend="over", **options)
 
 
 def layered_torus_output(
@@ -585,17 +565,19 @@ def layered_torus_output(
     ink=None,
     dot_style="disc",
     pen_width=(0.3, "mm"),
+    background=WHITE,
+    blend="multiply",
 ):
     """Bytes of layered torus dots in ``fmt``; ``layers`` are ``(name, colour, points)`` with points in unit
     coordinates of an image of ``shape = (H, W)``.
 
-    CSV is ``x,y,layer`` in pixels; SVG one layer per ink; PNG the inks printed on white. The default dot
-    radius makes the dots' ink equal to ``ink`` (the union density's mean; 0.5 if unknown). ``dot_style``
-    "disc" draws filled circles; "circle", "filled" and "point" draw pen paths (``stipple.plotter.dot_paths``)
-    of ``pen_width`` (physical ``(value, unit)``), in the SVG and in the PNG, which is then a plotter preview.
+    CSV is ``x,y,layer`` in pixels; SVG one Inkscape layer per ink; PNG the inks printed on ``background``.
+    Drawings are inset by the largest radius so that no dot crosses the canvas's edge (the CSV keeps the
+    exact positions). The default radius of a dot is the one that makes the dots' ink equal ``ink`` (the
+    density's mean; 0.5 if unknown), capped at 0.45 × its distance to the nearest dot of any layer
+    (``stipple.drawing``); ``dot_radius`` (physical ``(value, unit)``) fixes it. ``dot_style`` "disc" draws
+    filled discs; "circle", "filled" and "point" pen paths ``pen_width`` wide (a plotter preview in the PNG).
     """
-    from .plotter import dot_paths
-
     rows, columns = shape
     count = sum(len(points) for _, _, points in layers)
     placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
@@ -605,15 +587,101 @@ def layered_torus_output(
         return layered_csv_bytes(pixels, names)
     if fmt in (".geojson", ".json"):
         raise StippleError("GeoJSON output is for sphere points")
-    if dot_radius is None:
-        radius = ink_radius((0.5 if ink is None else ink) * rows * columns, count)
+    radius, stroke, pen = _look(width, columns, dot_radius, dot_style, pen_width)
+    tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
+    drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
+    drawn = with_pen_paths(drawn, dot_style, pen)
+    notes = [f"{count} dots in {len(drawn)} layer(s), inset {_margin(drawn, stroke):.4g} user units from the edges"]
+    return draw_layers(
+        drawn,
+        fmt,
+        (columns, rows),
+        width=width,
+        png_width=png_width,
+        count=count,
+        pen=pen,
+        background=background,
+        blend=blend,
+        notes=notes,
+    )
+
+
+def _margin(layers, pen):
+    """The largest radius drawn (or half the pen), for the SVG's note."""
+    radii = [dots.radii.max() for dots in layers if len(dots.radii)]
+    return max(radii + [(pen or 0.0) / 2])
+
+
+def sphere_output(
+    points,
+    lon_lat,
+    fmt,
+    *,
+    coords="lonlat",
+    projection="ortho",
+    view=(0.0, 0.0),
+    width=(200.0, "mm"),
+    dot_radius=None,
+    png_width=None,
+    ink=None,
+    color=BLACK,
+    background=WHITE,
+    dot_style="disc",
+    pen_width=(0.3, "mm"),
+):
+    """Bytes of sphere ``points`` (unit vectors; ``lon_lat`` their degrees) in ``fmt``.
+
+    CSV is ``lon,lat`` in degrees or ``x,y,z``; GeoJSON a MultiPoint. SVG and PNG draw ``projection``:
+    "equirect" every dot on the 2:1 map (inset from the edges like torus dots), "ortho" the visible side of
+    the globe around ``view = (lon, lat)``, each dot foreshortened towards the limb (an ellipse), so the limb
+    keeps its tone; the SVG says how many dots are on the visible side. The default angular radius keeps the
+    tone (``ink`` of the sphere, 0.5 if unknown), capped at 0.45 × the great-circle distance to the nearest dot.
+    """
+    longitude, latitude = lon_lat
+    if fmt == ".csv":
+        if coords == "xyz":
+            return csv_bytes(list(points.T), ["x", "y", "z"], number_format=".17g")
+        # Round-trip digits: 6 decimals of a degree would cap a spherical design's error near 6e-8.
+        return csv_bytes([longitude, latitude], ["lon", "lat"], number_format=".17g")
+    if fmt in (".geojson", ".json"):
+        return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
+    canvas = sphere_canvas(projection)
+    fixed, stroke, pen = _look(width, canvas[0], dot_radius, dot_style, pen_width)
+    per_radian = canvas[0] / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
+    tone = 2 * np.sqrt((0.5 if ink is None else ink) / max(len(points), 1))
+    angles = (
+        capped_radii(angular_distances(points), tone) if fixed is None else np.full(len(points), fixed / per_radian)
+    )
+    if projection == "equirect":
+        centres, margin = inset(
+            equirectangular(longitude, latitude, canvas[0]), canvas, per_radian * angles.max(initial=0)
+        )
+        drawn = Dots("dots", color, centres, np.minimum(angles * per_radian, margin))
+        notes = [f"{len(points)} dots, equirectangular (all of them)"]
     else:
-        radius = to_user_units(dot_radius, width, columns)
-    pen = to_user_units(pen_width, width, columns)
-    drawn = [
-        (name, colour, centres, None if dot_style == "disc" else dot_paths(centres, radius, dot_style, pen))
-        for name, colour, centres in placed
-    ]
+        centres, depth = orthographic(points, view)
+        visible = depth > 0
+        half = ORTHO_SIZE / 2
+        drawn = globe_dots("dots", color, centres[visible], depth[visible], angles[visible], per_radian, (half, half))
+        notes = [
+            f"{int(visible.sum())} of {len(points)} dots on the visible side (orthographic, view "
+            f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
+        ]
+    layers = with_pen_paths([drawn], dot_style, pen)
     if fmt == ".svg":
-        return layered_svg_bytes(drawn, (columns, rows), width, radius, pen)
-    return png_bytes(render_layers(drawn, (columns, rows), png_width or default_png_width(count), radius, pen))
+        return svg_document(layers, canvas, width, background=background, pen_width=pen, notes=notes)
+    picture = render_picture(
+        layers,
+        canvas,
+        png_width or default_png_width(len(points)),
+        background=background,
+        pen_width=pen,
+        underlay=_globe_outline if projection == "ortho" else None,
+    )
+    return png_bytes(picture)
+
+
+def _globe_outline(draw, scale):
+    """The globe's disc, marking its outline on the PNG."""
+    low, high = (1 - GLOBE) / 2 * ORTHO_SIZE * scale, (1 + GLOBE) / 2 * ORTHO_SIZE * scale
+    draw.ellipse((low, low, high, high), fill=255)

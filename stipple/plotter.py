@@ -107,8 +107,8 @@ def dot_paths(centres, radius, style="circle", pen_width=0.3):
     ----------
     centres : numpy.ndarray
         ``(M, 2)`` dot centres in drawing units.
-    radius : float
-        Dot radius in the same units.
+    radius : float or numpy.ndarray
+        Dot radius in the same units, one for all dots or one per dot.
     style : {"circle", "filled", "point"}
         "circle": the dot's outline (the pen's centre on ``radius - pen_width / 2``); "filled": a spiral that
         inks the whole disc with strokes ``pen_width`` apart; "point": a stroke a tenth of the pen wide, which
@@ -122,9 +122,10 @@ def dot_paths(centres, radius, style="circle", pen_width=0.3):
     """
     if style not in DOT_STYLES:
         raise ValueError(f"dot style must be one of {', '.join(DOT_STYLES)}, not {style!r}")
-    positions = np.asarray(centres, dtype=np.float64) @ np.array([1.0, 1j])
+    positions = np.asarray(centres, dtype=np.float64).reshape(-1, 2) @ np.array([1.0, 1j])
+    radii = np.broadcast_to(np.asarray(radius, dtype=np.float64), positions.shape)
     if style == "point":
         return [np.array([z, z + pen_width / 10]) for z in positions]
     if style == "circle":
-        return [circle_path(z, max(radius - pen_width / 2, pen_width / 20)) for z in positions]
-    return [spiral_path(z, radius, pen_width) for z in positions]
+        return [circle_path(z, max(r - pen_width / 2, pen_width / 20)) for z, r in zip(positions, radii, strict=True)]
+    return [spiral_path(z, r, pen_width) for z, r in zip(positions, radii, strict=True)]

@@ -10,7 +10,8 @@ import numpy as np
 import vpype as vp
 import vpype_cli
 
-from .colour import SEPARATIONS, halftone_colour
+from .colour import halftone_colour, parse_palette
+from .drawing import flat_dots
 from .errors import StippleError
 from .plotter import DOT_STYLES, dot_paths
 
@@ -18,26 +19,36 @@ from .plotter import DOT_STYLES, dot_paths
 def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
     """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
 
-    ``options`` go to ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone:
-    the dots of all inks together cover the union density's mean share of the page.
+    ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
+    ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
+    together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
+    nearest dot, and every dot lies inside the image (``stipple.drawing.flat_dots``).
     """
-    layers, problem, result = halftone_colour(image, n_points, separation=separation, **options)
+    layers, problem, result = halftone_colour(image, n_points, separation=parse_palette(separation), **options)
     rows, columns = layers[0].density.shape
     scale = width / columns
-    if dot_radius is None:
-        ink = sum(layer.density for layer in layers).mean()
-        dot_radius = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
-    drawn = []
-    for layer, part in zip(layers, problem.slices, strict=True):
-        centres = result.points[part] * np.array([columns, rows]) * scale
-        drawn.append((layer.name, layer.colour, dot_paths(centres, dot_radius, dot_style, pen_width)))
+    ink = sum(layer.density for layer in layers).mean()
+    tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
+    placed = [
+        (layer.name, layer.colour, result.points[part] * np.array([columns, rows]) * scale)
+        for layer, part in zip(layers, problem.slices, strict=True)
+    ]
+    dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
+    drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
 
 
 @click.command("stipple")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
 @click.option("-M", "--points", "n_points", type=vpype_cli.IntegerType(), default=10000, show_default=True)
-@click.option("--separation", type=click.Choice(SEPARATIONS), default="gray", show_default=True, help="Inks.")
+@click.option(
+    "--palette",
+    "--separation",
+    "separation",
+    default="gray",
+    show_default=True,
+    help="Inks: cmyk, cmy, gray, or pen colours '#00a0e0,#e0007a,...'.",
+)
 @click.option("--black", type=click.FloatRange(0, 1), default=1.0, show_default=True, help="Grey into black (cmyk).")
 @click.option("--union-weight", type=float, default=1.0, show_default=True, help="Weight of the all-dots term.")
 @click.option("-w", "--width", type=vpype_cli.LengthType(), default="200mm", show_default=True, help="Image width.")

@@ -33,7 +33,9 @@ def test_sphere_outputs(map_path, tmp_path):
     geojson = json.loads((tmp_path / "dots.geojson").read_text())
     coordinates = geojson["features"][0]["geometry"]["coordinates"]
     np.testing.assert_allclose(coordinates, table, atol=1e-6)
-    assert 0 < (tmp_path / "dots.svg").read_text().count("<circle") < 200
+    svg = (tmp_path / "dots.svg").read_text()
+    shown = svg.count("<ellipse")  # the visible side, foreshortened
+    assert 0 < shown < 200 and f"{shown} of 200 dots on the visible side" in svg
     assert Image.open(tmp_path / "globe.png").size == (1024, 1024)
 
 

@@ -1,0 +1,116 @@
+"""Geometry of drawn dots: radii that keep the tone without letting neighbours touch, an inset that keeps every
+dot inside the canvas, and foreshortened dots on the orthographic globe.
+
+The default radius of a dot is ``min(r_tone, TOUCH_FRACTION * d)``, ``d`` its distance to its nearest
+neighbour on the drawing: ``r_tone`` (``pi r^2 M = ink area``) keeps the tone wherever the dots are far enough
+apart, and two dots ``i, j`` never touch, since ``r_i + r_j <= 0.9 max(d_i, d_j) <= 0.9 |p_i - p_j|``.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+TOUCH_FRACTION = 0.45
+MIN_SQUASH = 0.02
+
+
+@dataclass
+class Dots:
+    """One layer of dots in canvas user units.
+
+    ``radii`` are per dot; a foreshortened dot is an ellipse whose axis along ``angle`` (radians, canvas
+    coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.plotter``), if any.
+    """
+
+    name: str
+    colour: tuple
+    centres: np.ndarray
+    radii: np.ndarray
+    squash: np.ndarray | None = None
+    angle: np.ndarray | None = None
+    paths: list | None = None
+
+
+def nearest_distances(points):
+    """Distance from each row of ``points`` to its nearest other row (``inf`` for a single point)."""
+    if len(points) < 2:
+        return np.full(len(points), np.inf)
+    distances, _ = cKDTree(points).query(points, k=2)
+    return distances[:, 1]
+
+
+def capped_radii(distances, tone_radius, fraction=TOUCH_FRACTION):
+    """Per-dot radii ``min(tone_radius, fraction * distances)`` (see the module's docstring)."""
+    return np.minimum(float(tone_radius), fraction * np.asarray(distances, dtype=np.float64))
+
+
+def inset(centres, size, margin):
+    """Positions on a ``size = (width, height)`` canvas mapped affinely onto the canvas shrunk by ``margin`` on
+    every side, so that a dot of radius up to ``margin`` stays inside (at most a quarter of the shorter side)."""
+    extent = np.asarray(size, dtype=np.float64)
+    margin = min(float(margin), 0.25 * extent.min())
+    return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
+
+
+def flat_dots(layers, size, tone_radius=None, radius=None, pen=None):
+    """``Dots`` of layers ``(name, colour, centres)`` on a flat canvas, inset so that none crosses its edge.
+
+    With ``radius`` every dot has it; otherwise radii are capped from the spacing of all layers' dots together
+    (``capped_radii`` of ``tone_radius``). ``pen`` (a stroke width) widens the margin for pen-drawn dots.
+    """
+    margin = max(radius if radius is not None else tone_radius, (pen or 0.0) / 2)
+    placed = []
+    for name, colour, centres in layers:
+        moved, margin_used = inset(centres, size, margin)
+        placed.append((name, colour, moved))
+    if radius is not None:
+        return [Dots(name, colour, c, np.full(len(c), float(radius))) for name, colour, c in placed]
+    everything = np.concatenate([c for _, _, c in placed]) if placed else np.zeros((0, 2))
+    radii = np.minimum(capped_radii(nearest_distances(everything), tone_radius), margin_used)
+    ends = np.cumsum([len(c) for _, _, c in placed])
+    return [
+        Dots(name, colour, c, radii[end - len(c) : end]) for (name, colour, c), end in zip(placed, ends, strict=True)
+    ]
+
+
+def angular_distances(points):
+    """Great-circle distance (radians) from each unit vector to its nearest other one."""
+    chords = nearest_distances(points)
+    return 2 * np.arcsin(np.clip(chords / 2, 0, 1))
+
+
+def globe_dots(name, colour, canvas_xy, depth, angular_radii, globe_radius, centre):
+    """Dots on the orthographic globe: radius ``angular_radii * globe_radius``, the axis towards the limb
+    foreshortened by ``depth`` (the cosine of the angle from the view's centre), so the limb keeps its tone."""
+    offset = canvas_xy - np.asarray(centre)
+    return Dots(
+        name,
+        colour,
+        canvas_xy,
+        angular_radii * globe_radius,
+        squash=np.clip(depth, MIN_SQUASH, 1.0),
+        angle=np.arctan2(offset[:, 1], offset[:, 0]),
+    )
+
+
+def squash_paths(paths, dots):
+    """Pen paths of round dots flattened like ``dots`` (ellipses); unchanged when the dots are round."""
+    if dots.squash is None:
+        return paths
+    squashed = []
+    for path, centre, factor, angle in zip(
+        paths, dots.centres @ np.array([1.0, 1j]), dots.squash, dots.angle, strict=True
+    ):
+        turn = np.exp(1j * angle)
+        local = (path - centre) / turn
+        squashed.append(centre + (local.real * factor + 1j * local.imag) * turn)
+    return squashed
+
+
+def ellipse_polygon(centre, radius, squash=1.0, angle=0.0, segments=24):
+    """Vertices ``[(x, y), ...]`` of a dot's outline (an ellipse when ``squash < 1``)."""
+    t = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    local = radius * (squash * np.cos(t) + 1j * np.sin(t)) * np.exp(1j * angle)
+    z = complex(centre[0], centre[1]) + local
+    return list(zip(z.real, z.imag, strict=True))

@@ -1,0 +1,116 @@
+"""Drawing defaults: dots that never touch, stay on the canvas, --invert as white on black, and the globe."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+from scipy.spatial import cKDTree
+
+from stipple.cli import main
+from stipple.drawing import capped_radii, inset
+
+PORTRAIT = Path(__file__).resolve().parent.parent / "samples" / "astronaut256.png"
+
+
+def run(args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exit_code == 0, result.output
+    return result
+
+
+def circles(path):
+    """``(x, y, r)`` rows of the SVG's circles."""
+    found = re.findall(r'<circle cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"', Path(path).read_text())
+    return np.array(found, dtype=float)
+
+
+def radius_over_spacing(table):
+    """Each dot's radius over its distance to the nearest other dot on the drawing."""
+    distances, _ = cKDTree(table[:, :2]).query(table[:, :2], k=2)
+    return table[:, 2] / distances[:, 1]
+
+
+def test_default_radius_leaves_neighbours_apart_on_the_portrait(tmp_path):
+    run(["torus", PORTRAIT, "-M", 3000, "--iterations", 15, "-q", "-o", tmp_path / "p.svg"])
+    table = circles(tmp_path / "p.svg")
+    ratio = radius_over_spacing(table)
+    assert len(table) == 3000 and np.mean(ratio < 0.5) >= 0.99 and ratio.max() <= 0.45 + 1e-3
+    # The cap only bites where dots are close: the light regions keep the tone radius (the largest one).
+    assert np.mean(table[:, 2] >= table[:, 2].max() - 1e-3) > 0.1
+    inside = (table[:, :2] - table[:, 2:] >= 0) & (table[:, :2] + table[:, 2:] <= 256)
+    assert inside.all()
+
+
+def test_uniform_sphere_is_not_a_black_disc(tmp_path):
+    outputs = ["-o", tmp_path / "map.svg", "-o", tmp_path / "globe.png"]
+    run(["sphere", "--uniform", "-M", 2000, "--iterations", 15, "--projection", "equirect", "-q", *outputs])
+    table = circles(tmp_path / "map.svg")
+    assert len(table) == 2000  # equirect: every dot, none dropped
+    assert np.mean(radius_over_spacing(table) < 0.5) >= 0.99
+    assert np.all(table[:, :2] - table[:, 2:] >= 0) and np.all(table[:, :2] + table[:, 2:] <= [2000, 1000])
+    run(["sphere", "--uniform", "-M", 2000, "--iterations", 15, "-q", "-o", tmp_path / "globe.png"])
+    gray = np.asarray(Image.open(tmp_path / "globe.png").convert("L"), dtype=float)
+    y, x = np.mgrid[: gray.shape[0], : gray.shape[1]]
+    r = np.hypot(x - gray.shape[1] / 2, y - gray.shape[0] / 2) / (0.49 * gray.shape[0])
+    centre, limb = gray[r < 0.5].mean(), gray[(r > 0.85) & (r < 0.97)].mean()
+    assert 60 < centre < 200 and abs(limb - centre) < 0.1 * centre  # grey, and foreshortening keeps the limb's tone
+
+
+def test_orthographic_svg_counts_the_visible_side(tmp_path):
+    run(["sphere", "--uniform", "-M", 500, "--iterations", 3, "-q", "-o", tmp_path / "g.svg", "--view", "30,40"])
+    svg = (tmp_path / "g.svg").read_text()
+    shown = svg.count("<ellipse")
+    assert 200 < shown < 300 and f"{shown} of 500 dots on the visible side" in svg
+
+
+@pytest.fixture
+def ramp(tmp_path):
+    """Dark on the left, light on the right."""
+    pixels = np.tile(np.linspace(20, 235, 48).astype(np.uint8), (32, 1))
+    path = tmp_path / "ramp.png"
+    Image.fromarray(pixels).save(path)
+    return path
+
+
+def test_invert_draws_light_dots_on_black_where_the_image_is_light(ramp, tmp_path):
+    run(["torus", ramp, "-M", 400, "--iterations", 10, "--invert", "-q", "-o", tmp_path / "i.png"])
+    gray = np.asarray(Image.open(tmp_path / "i.png").convert("L"), dtype=float)
+    assert np.median(gray) < 40 and np.mean(gray > 200) > 0.02  # mostly dark, with light dots
+    left, right = gray[:, : gray.shape[1] // 3], gray[:, -gray.shape[1] // 3 :]
+    assert right.mean() > left.mean() + 20  # the light side of the image is the light side of the picture
+
+
+def test_background_and_colour_for_any_pair(ramp, tmp_path):
+    args = ["torus", ramp, "-M", 200, "--iterations", 3, "-q", "--background", "navy", "--color", "#ffe000"]
+    run(args + ["-o", tmp_path / "c.png", "-o", tmp_path / "c.svg"])
+    rgb = np.asarray(Image.open(tmp_path / "c.png").convert("RGB"), dtype=float)
+    corner_colours = {tuple(rgb[0, 0]), tuple(rgb[-1, -1])}
+    assert (0, 0, 128) in corner_colours or rgb[..., 2].max() == 128  # navy paper
+    assert np.any((rgb[..., 0] > 200) & (rgb[..., 1] > 180) & (rgb[..., 2] < 80))  # yellow dots
+    svg = (tmp_path / "c.svg").read_text()
+    assert 'fill="#000080"' in svg and 'fill="#ffe000"' in svg
+    result = CliRunner().invoke(main, ["torus", str(ramp), "-M", "20", "--color", "blurple", "-q"])
+    assert result.exit_code == 1 and "color must be a colour" in result.output
+
+
+def test_no_dot_crosses_the_edge_with_a_large_radius_or_a_pen(ramp, tmp_path):
+    common = ["torus", ramp, "-M", 300, "--iterations", 3, "-q", "--width", "48mm"]
+    run(common + ["--dot-radius", "1.5mm", "-o", tmp_path / "big.svg"])
+    table = circles(tmp_path / "big.svg")
+    assert np.allclose(table[:, 2], 1.5) and np.all(table[:, :2] - 1.5 >= 0) and np.all(table[:, :2] + 1.5 <= [48, 32])
+    run(common + ["--dot-style", "filled", "--pen-width", "0.4mm", "-o", tmp_path / "pen.svg"])
+    coordinates = re.findall(
+        r"([-0-9.]+),([-0-9.]+)", " ".join(re.findall(r'd="([^"]+)"', (tmp_path / "pen.svg").read_text()))
+    )
+    vertices = np.array(coordinates, dtype=float)
+    assert len(vertices) > 300 and np.all(vertices - 0.2 >= -1e-3) and np.all(vertices + 0.2 <= [48.001, 32.001])
+
+
+def test_capped_radii_and_inset_rules():
+    np.testing.assert_allclose(capped_radii([1.0, 4.0, 10.0], 2.0), [0.45, 1.8, 2.0])
+    moved, margin = inset(np.array([[0.0, 0.0], [10.0, 5.0]]), (10.0, 5.0), 1.0)
+    np.testing.assert_allclose(moved, [[1.0, 1.0], [9.0, 4.0]])
+    assert margin == 1.0
