@@ -542,7 +542,6 @@ def torus(ctx, image, **options):
 @click.argument("image", required=False)
 @common_options
 @click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.5 sqrt(M W H)).")
-@click.option("--pen-width", default=None, help="Stroke width in SVG/PNG, e.g. 0.3mm (default: one input pixel).")
 @click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
 @click.pass_context
 def line(ctx, image, **options):
@@ -556,7 +555,9 @@ def line(ctx, image, **options):
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         width = parse_length(options["width"])
-        pen_width = None if options["pen_width"] is None else parse_length(options["pen_width"])
+        # The line's own default stroke is one input pixel, unless --pen-width is given.
+        given = ctx.get_parameter_source("pen_width") is not click.core.ParameterSource.DEFAULT
+        pen_width = parse_length(options["pen_width"], "pen-width") if given else None
         inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
         with guarded_files(inputs, options["outputs"], options["checkpoint"]):
             weights = load_input(
