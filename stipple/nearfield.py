@@ -22,7 +22,11 @@ class TorusPairs:
         self.scale = np.asarray(scale, dtype=float)
 
     def positions(self, points):
-        return np.mod(points, 1.0) * self.scale
+        """Physical positions in ``[0, scale)`` (``np.mod`` only when needed: it is slow, and CG's points are
+        already wrapped)."""
+        if points.min(initial=0.0) < 0 or points.max(initial=0.0) >= 1:
+            points = np.mod(points, 1.0)
+        return points * self.scale
 
     def tree(self, positions):
         return cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
@@ -30,12 +34,13 @@ class TorusPairs:
     def displacement(self, start, end):
         """Shortest periodic displacement from ``end`` to ``start`` (``start - end``), row by row."""
         delta = start - end
-        delta -= self.scale * np.round(delta / self.scale)
+        for axis in range(delta.shape[1]):
+            self.wrap(delta[:, axis], axis)
         return delta
 
     def wrap(self, delta, axis):
         """One component of displacements, made shortest along ``axis`` (in place)."""
-        delta -= self.scale[axis] * np.round(delta / self.scale[axis])
+        delta -= self.scale[axis] * np.rint(delta / self.scale[axis])
         return delta
 
     def to_physical(self, vectors):

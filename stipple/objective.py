@@ -51,8 +51,12 @@ class Discrepancy:
         self.hessian = hessian
         self.cross_kernel = np.zeros_like(kernel) if cross_kernel is None else cross_kernel
         self.bandlimited_weights = (kernel + self.cross_kernel) * fourier.multiplicity
+        self._has_cross = bool(self.cross_kernel.any())
         self._cross_pull = self.cross_kernel * target
-        self._cross_weights = self.cross_kernel * fourier.multiplicity
+        # -sum mult k^near (|w|^2 + 2 Re conj(F) w): a constant and one real dot product with F per evaluation.
+        weighted_pull = np.broadcast_to(self.cross_kernel * fourier.multiplicity, np.shape(target)) * target
+        self._cross_constant = -float(np.sum(weighted_pull.conj() * target).real)
+        self._cross_dot = -2 * _real_view(np.ascontiguousarray(weighted_pull, dtype=np.complex128))
         self._residual = None
 
     def set_points(self, points):
@@ -66,10 +70,9 @@ class Discrepancy:
     def energy(self):
         residual = _real_view(self._residual)
         quadratic = float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
-        if not self.cross_kernel.any():
+        if not self._has_cross:
             return quadratic
-        cross = np.abs(self.target) ** 2 + 2 * (self._residual.conj() * self.target).real
-        return quadratic - float(np.sum(self._cross_weights * cross))
+        return quadratic + self._cross_constant + float(np.einsum("i,i->", self._cross_dot, _real_view(self._residual)))
 
     def bandlimited_energy(self):
         """The paper's ``E_N = sum_l mult_l k_l |F_l|^2`` with the whole kernel ``k = k^R + k^near``."""
