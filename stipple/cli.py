@@ -352,6 +352,11 @@ def render_settings(options):
     }
 
 
+def _is_default(ctx, name):
+    """Whether option ``name`` kept its default (not given on the command line, in the environment or a config)."""
+    return ctx.get_parameter_source(name) is click.core.ParameterSource.DEFAULT
+
+
 def check_longitude(name, value):
     """A finite longitude in [-360, 360] degrees."""
     if not -360 <= value <= 360:
@@ -556,8 +561,7 @@ def line(ctx, image, **options):
     try:
         width = parse_length(options["width"])
         # The line's own default stroke is one input pixel, unless --pen-width is given.
-        given = ctx.get_parameter_source("pen_width") is not click.core.ParameterSource.DEFAULT
-        pen_width = parse_length(options["pen_width"], "pen-width") if given else None
+        pen_width = None if _is_default(ctx, "pen_width") else parse_length(options["pen_width"], "pen-width")
         inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
         with guarded_files(inputs, options["outputs"], options["checkpoint"]):
             weights = load_input(
@@ -638,7 +642,12 @@ def read_torus_init(init, shape):
     show_default=True,
     help="Longitude (degrees east) where the map's first column starts (-180 for maps centred on 0°).",
 )
-@click.option("--kernel", default="distance", show_default=True, help="'distance' (the paper's) or 'sobolev:S'.")
+@click.option(
+    "--kernel",
+    default=None,
+    help="'distance' (the paper's; default for maps), 'distance+design:T' (default for --uniform: T = 0.9 sqrt(2M)) "
+    "or 'sobolev:S'.",
+)
 @click.option(
     "--init",
     default="density",
@@ -661,7 +670,7 @@ def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
     from .outputs import sphere_output
-    from .sphere import DEFAULT_EPSILON, lon_lat, sphere_problem
+    from .sphere import DESIGN_TOL, lon_lat, sphere_problem
 
     started = time.perf_counter()
     map_source = resolve_input(ctx, map_source)
@@ -680,9 +689,11 @@ def sphere(ctx, map_source, **options):
                 options["bandwidth"],
                 kernel=options["kernel"],
                 threads=options["threads"],
-                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+                epsilon=options["epsilon"],
                 near_field=options["near_field"],
             )
+            if problem.settings["kernel"].startswith("distance+design") and _is_default(ctx, "tol"):
+                options["tol"] = DESIGN_TOL
             result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
             points = plot_order(result.points, result.points, options, "radians")
             degrees = lon_lat(points)

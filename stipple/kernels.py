@@ -64,20 +64,45 @@ def distance_kernel(degrees):
     return np.where(n == 0, 0.0, values)
 
 
+DESIGN_WEIGHT = 0.1
+
+
 def sphere_kernel(kernel, degrees):
-    """Kernel coefficients by degree: ``"distance"`` (the paper's restricted distance kernel) or
-    ``"sobolev:S"``, ``k_n = (1 + n(n+1))^-S`` (flatter: better conditioned, for numerical designs)."""
+    """Kernel coefficients by degree.
+
+    ``"distance"``: the paper's restricted distance kernel. ``"distance+design:T"``: the distance kernel plus
+    ``0.1 (1 + n(n+1))^-1/2`` for ``1 <= n <= T``, which asks the points to integrate every harmonic up to degree
+    ``T`` nearly exactly (a near-design) while the distance kernel keeps them spread (``--uniform``'s default).
+    ``"sobolev:S"``: ``k_n = (1 + n(n+1))^-S`` (flatter: better conditioned, for numerical designs).
+    """
+    name, _, parameter = str(kernel).partition(":")
     if kernel == "distance":
         return distance_kernel(degrees)
-    name, _, exponent = str(kernel).partition(":")
+    if name == "distance+design":
+        return distance_kernel(degrees) + design_boost(degrees, _design_strength(kernel, parameter))
     try:
-        smoothness = float(exponent)
+        smoothness = float(parameter)
     except ValueError:
         smoothness = None
     if name != "sobolev" or smoothness is None or not 0 <= smoothness <= 4:
-        raise StippleError(f"kernel must be 'distance' or 'sobolev:S' with 0 <= S <= 4, not {kernel!r}")
+        raise StippleError(
+            f"kernel must be 'distance', 'distance+design:T' or 'sobolev:S' with 0 <= S <= 4, not {kernel!r}"
+        )
     degrees = np.asarray(degrees, dtype=float)
     return np.where(degrees == 0, 0.0, (1 + degrees * (degrees + 1)) ** -smoothness)
+
+
+def design_boost(degrees, strength):
+    """``0.1 (1 + n(n+1))^-1/2`` for ``1 <= n <= strength``, else 0."""
+    degrees = np.asarray(degrees, dtype=float)
+    inside = (degrees >= 1) & (degrees <= strength)
+    return np.where(inside, DESIGN_WEIGHT * (1 + degrees * (degrees + 1)) ** -0.5, 0.0)
+
+
+def _design_strength(kernel, parameter):
+    if not parameter.isdigit() or not 1 <= int(parameter) <= 8192:
+        raise StippleError(f"kernel 'distance+design:T' needs a degree 1 <= T <= 8192, not {kernel!r}")
+    return int(parameter)
 
 
 # ---------------------------------------------------------------------------------------------------------------

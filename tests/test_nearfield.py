@@ -119,7 +119,7 @@ def test_torus_split_equals_the_direct_sum_of_the_whole_kernel(rng, shape):
 def test_sphere_split_equals_the_direct_sum_of_the_distance_kernel(rng):
     """Uniform density: the untruncated energy is ``lam² sum_ij (4/3 - |x_i - x_j|)``."""
     points = Sphere().random(rng, 80)
-    problem = sphere_problem(None, 80, 96, threads=1, epsilon=1e-13, near_field=True)
+    problem = sphere_problem(None, 80, 96, kernel="distance", threads=1, epsilon=1e-13, near_field=True)
     problem.objective.set_points(points)
     chords = np.linalg.norm(points[:, None] - points[None], axis=-1)
     weight = problem.discrepancy.weight

@@ -258,3 +258,27 @@ def test_numerical_design_of_degree_eight(n_points):
     for degree, order in [(1, 0), (5, 3), (8, 8)]:
         total = np.sum(sph_harm(np.array([degree]), np.array([order]), result.points))
         assert abs(4 * np.pi / n_points * total) < 1e-10
+
+
+def test_uniform_default_kernel_adds_a_design_term():
+    from stipple.kernels import distance_kernel
+
+    uniform = sphere_problem(None, 1000, 60, threads=1)
+    assert uniform.settings["kernel"] == "distance+design:40"  # floor(0.9 sqrt(2000))
+    degrees, _ = alm_degrees_orders(60)
+    kernel = uniform.discrepancy.kernel + uniform.discrepancy.cross_kernel
+    boost = kernel - distance_kernel(degrees)
+    expected = np.where((degrees >= 1) & (degrees <= 40), 0.1 / np.sqrt(1 + degrees * (degrees + 1.0)), 0.0)
+    np.testing.assert_allclose(boost, expected, rtol=1e-9, atol=1e-15)
+    assert sphere_problem(three_gaussians, 1000, 60, threads=1).settings["kernel"] == "distance"
+
+
+def test_uniform_default_beats_the_fibonacci_lattice_at_low_degrees():
+    """With the design term, the default run integrates low-degree harmonics better than the Fibonacci lattice."""
+    from stipple.evaluate import discrepancy_energy, expected_iid_energy, fibonacci_sphere
+
+    result = halftone_sphere(None, 400, iterations=400, tol=1e-12, threads=1, seed=3)
+    judge = sphere_problem(None, 400, 20, kernel="distance", threads=1, epsilon=1e-12, near_field=False)
+    ours = discrepancy_energy(judge, result.points) / expected_iid_energy(judge)
+    lattice = discrepancy_energy(judge, fibonacci_sphere(400)) / expected_iid_energy(judge)
+    assert ours < lattice / 10
