@@ -645,7 +645,7 @@ def read_torus_init(init, shape):
 @click.option(
     "--kernel",
     default=None,
-    help="'distance' (the paper's; default for maps), 'distance+design:T' (default for --uniform: T = 0.9 sqrt(2M)) "
+    help="'distance' (the paper's; default for maps), 'distance+design:T' (default for --uniform: T = 0.96 sqrt(2M)) "
     "or 'sobolev:S'.",
 )
 @click.option(

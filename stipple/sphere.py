@@ -58,9 +58,11 @@ def default_bandwidth(n_points, density=None):
 
 
 def design_degree(n_points):
-    """``floor(0.9 sqrt(2M))``: a degree up to which M points can integrate all harmonics nearly exactly (a design
-    of strength t needs about t²/2 points; Gräf & Potts)."""
-    return max(1, int(0.9 * np.sqrt(2 * n_points)))
+    """``floor(0.96 sqrt(2M))``: nearly the highest degree up to which M points can integrate every harmonic
+    exactly (a design of strength t needs about t²/2 points; Gräf & Potts). Measured at M = 10000: with
+    ``0.9 sqrt(2M)`` (127) the error at degree 128 stayed at the Fibonacci lattice's; with 135 it was 34 times
+    lower."""
+    return max(1, int(0.96 * np.sqrt(2 * n_points)))
 
 
 def default_kernel(density, n_points):
@@ -68,7 +70,8 @@ def default_kernel(density, n_points):
 
     Measured at M = 10000 against the spherical Fibonacci lattice: the distance kernel alone (its untruncated
     energy is the L2 cap discrepancy, by Stolarsky's principle) beat it on Coulomb energy and cap discrepancy but
-    not on the bandlimited error at degree 128 (1e-5 against 7e-7 of i.i.d.); with the design term all three.
+    not on the bandlimited error at degree 128 (1e-5 against 7e-7 of i.i.d.); with the design term (T = 135) on
+    all three (2.1e-8, README "Spherical designs").
     """
     return f"distance+design:{design_degree(n_points)}" if isinstance(density, UniformDensity) else "distance"
 

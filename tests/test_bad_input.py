@@ -283,7 +283,7 @@ def test_resume_refuses_another_kernel_or_domain(files):
     path = files[0] / "sphere.npz"
     base = ["sphere", "--uniform", "-M", 30, "-N", 4, "--iterations", 2, "-q", "-o", files[2]]
     assert CliRunner().invoke(main, [str(a) for a in base + ["--checkpoint", path]]).exit_code == 0
-    assert "kernel was 'distance+design:6', now 'sobolev:1'" in invoke(
+    assert "kernel was 'distance+design:7', now 'sobolev:1'" in invoke(
         base + ["--checkpoint", path, "--resume", "--kernel", "sobolev:1"]
     )
     text = invoke(["torus", files[1], "-M", 30, "-N", 4, "-q", "-o", files[2], "--checkpoint", path, "--resume"])
