@@ -59,6 +59,12 @@ def load_gray(data, name="input"):
     (values in [0, 1], or 0..255 / 0..65535, which are rescaled like 8- and 16-bit images). EXIF
     orientation is applied. Pillow's decompression-bomb guard stays on.
     """
+    return _gray_values(open_image(data, name, "not a supported image or .npy file, or truncated"), name)
+
+
+def open_image(data, name, unknown):
+    """A decoded image (EXIF orientation applied) from a file's bytes, Pillow's decompression-bomb guard on;
+    ``unknown`` says what an undecodable file may be."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
@@ -67,11 +73,10 @@ def load_gray(data, name="input"):
     except (Image.DecompressionBombError, Image.DecompressionBombWarning):
         raise StippleError(f"{name}: image is too large (Pillow's decompression-bomb guard)") from None
     except UnidentifiedImageError:
-        raise StippleError(f"{name}: cannot decode image (not a supported image or .npy file, or truncated)") from None
+        raise StippleError(f"{name}: cannot decode image ({unknown})") from None
     except (OSError, SyntaxError, ValueError, MemoryError) as error:
         raise StippleError(f"{name}: cannot decode image ({error or type(error).__name__})") from None
-    image = ImageOps.exif_transpose(image)
-    return _gray_values(image, name)
+    return ImageOps.exif_transpose(image)
 
 
 def _gray_values(image, name):
@@ -269,18 +274,8 @@ def load_colour(source, name=None):
         raise StippleError(f"{name}: file is empty")
     if data.startswith(NPY_MAGIC):
         raise StippleError(f"{name}: colour separation needs an image (PNG, JPEG, ...), not a .npy array")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
-            image = Image.open(io.BytesIO(data))
-            image.load()
-    except (Image.DecompressionBombError, Image.DecompressionBombWarning):
-        raise StippleError(f"{name}: image is too large (Pillow's decompression-bomb guard)") from None
-    except UnidentifiedImageError:
-        raise StippleError(f"{name}: cannot decode image (not a supported image, or truncated)") from None
-    except (OSError, SyntaxError, ValueError) as error:
-        raise StippleError(f"{name}: cannot decode image ({error})") from None
-    rgba = np.asarray(ImageOps.exif_transpose(image).convert("RGBA"), dtype=np.float64) / 255.0
+    image = open_image(data, name, "not a supported image, or truncated")
+    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
     colour = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
     check_grid(colour[..., 0], name)
     return colour
