@@ -584,6 +584,7 @@ def line(ctx, image, **options):
 def solve_line(weights, options, init):
     """``draw_line`` with the CLI's stopping, checkpoint, progress and signal options."""
     from .line import draw_line
+    from .torus import DEFAULT_EPSILON
 
     seconds, iterations = parse_every(options["checkpoint_every"])
     check_integer("seed", options["seed"], 0, 2**63 - 1)
@@ -606,7 +607,7 @@ def solve_line(weights, options, init):
                 checkpoint_iterations=iterations,
                 resume=options["resume"],
                 threads=options["threads"],
-                epsilon=options["epsilon"] or 1e-9,
+                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
             )
         finally:
             progress.close()
