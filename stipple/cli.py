@@ -170,35 +170,28 @@ def resolve_input(ctx, given):
     return given if given is not None else (ctx.default_map or {}).get("input")
 
 
-def common_options(function):
-    """Options shared by ``torus`` and ``sphere``: size, stopping, reproducibility, speed, files, outputs."""
-    options = [
-        click.option(
-            "--config",
-            type=click.Path(dir_okay=False),
-            callback=load_config,
-            is_eager=True,
-            expose_value=False,
-            help="TOML file of option values (command-line options win).",
-        ),
-        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
-        click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
+def config_option():
+    return click.option(
+        "--config",
+        type=click.Path(dir_okay=False),
+        callback=load_config,
+        is_eager=True,
+        expose_value=False,
+        help="TOML file of option values (command-line options win).",
+    )
+
+
+def run_options(iterations=2000):
+    """Stopping, reproducibility and speed: shared by every optimising command."""
+    return [
         click.option(
             "--iterations",
             type=click.IntRange(min=0),
-            default=2000,
+            default=iterations,
             show_default=True,
             help="Maximum total number of CG iterations.",
         ),
-        click.option(
-            "--tol",
-            type=float,
-            default=1e-4,
-            show_default=True,
-            help="Stop when the gradient norm falls to this fraction of the initial one.",
-        ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
-        click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
         click.option(
             "--threads",
@@ -207,6 +200,70 @@ def common_options(function):
             help="Transform threads (default: torus 1, bit-reproducible; sphere all CPUs).",
         ),
         click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+    ]
+
+
+def output_options():
+    """Output files and the drawing of dots."""
+    return [
+        click.option(
+            "-o",
+            "--output",
+            "outputs",
+            multiple=True,
+            default=("-",),
+            show_default=True,
+            help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
+        ),
+        click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
+        click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
+        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
+        click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
+        look_options,
+    ]
+
+
+def session_options():
+    """Checkpoints and what is reported."""
+    return [
+        click.option(
+            "--checkpoint",
+            type=click.Path(dir_okay=False),
+            default=None,
+            help="Save the optimiser state here (atomically) during and after the run.",
+        ),
+        click.option(
+            "--checkpoint-every",
+            default="60s",
+            show_default=True,
+            help="Checkpoint interval: seconds (60s, 5m) or iterations (100).",
+        ),
+        click.option("--resume", is_flag=True, help="Continue the run saved in --checkpoint."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary."),
+        click.option("-v", "--verbose", is_flag=True, help="Also report the settings chosen."),
+    ]
+
+
+def apply_options(function, options):
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def common_options(function):
+    """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
+    the density's transfer, files and outputs."""
+    problem = [
+        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
+        click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
+        click.option(
+            "--tol",
+            type=float,
+            default=1e-4,
+            show_default=True,
+            help="Stop when the gradient norm falls to this fraction of the initial one.",
+        ),
+        click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option(
             "--near-field/--no-near-field",
             default=None,
@@ -226,39 +283,8 @@ def common_options(function):
             default=None,
             help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
         ),
-        click.option(
-            "-o",
-            "--output",
-            "outputs",
-            multiple=True,
-            default=("-",),
-            show_default=True,
-            help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
-        ),
-        click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
-        click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
-        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
-        click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
-        look_options,
-        click.option(
-            "--checkpoint",
-            type=click.Path(dir_okay=False),
-            default=None,
-            help="Save the optimiser state here (atomically) during and after the run.",
-        ),
-        click.option(
-            "--checkpoint-every",
-            default="60s",
-            show_default=True,
-            help="Checkpoint interval: seconds (60s, 5m) or iterations (100).",
-        ),
-        click.option("--resume", is_flag=True, help="Continue the run saved in --checkpoint."),
-        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary."),
-        click.option("-v", "--verbose", is_flag=True, help="Also report the settings chosen."),
     ]
-    for option in reversed(options):
-        function = option(function)
-    return function
+    return apply_options(function, [config_option()] + problem + run_options() + output_options() + session_options())
 
 
 def load_input(source, **options):
@@ -405,8 +431,9 @@ def write_outputs(paths, render):
     commit_outputs([(path, render(output_format(path))) for path in paths])
 
 
-def solve(problem, options, init):
-    """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options."""
+def solve(problem, options, init, stop=None):
+    """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options (and ``stop``, a callback
+    that ends the run by returning True)."""
     from .halftone import run
 
     seconds, iterations = parse_every(options["checkpoint_every"])
@@ -432,7 +459,9 @@ def solve(problem, options, init):
                 iterations=options["iterations"],
                 time_limit=options["time_limit"],
                 safeguard=options["safeguard"],
-                callback=lambda state: progress(state) or interruption.stop_requested(state),
+                callback=lambda state: any(
+                    [progress(state), interruption.stop_requested(state), bool(stop and stop(state))]
+                ),
                 checkpoint=options["checkpoint"],
                 checkpoint_seconds=seconds,
                 checkpoint_iterations=iterations,
@@ -1130,5 +1159,7 @@ def format_report(report):
 
 
 from .cli_colour import colour  # noqa: E402  (defined beside, registered here)
+from .cli_design import design  # noqa: E402
 
 main.add_command(colour)
+main.add_command(design)

@@ -67,6 +67,15 @@ class Discrepancy:
         residual -= self.target
         self._residual = residual
 
+    @property
+    def residual(self):
+        """``F_l`` at the current points (read-only; None before the first ``set_points``)."""
+        if self._residual is None:
+            return None
+        view = self._residual.view()
+        view.flags.writeable = False
+        return view
+
     def energy(self):
         residual = _real_view(self._residual)
         quadratic = float(np.einsum("i,i,i->", self._pair_weights, residual, residual))

@@ -1,0 +1,107 @@
+"""``stipple design``: numerical spherical designs of a given strength (registered in ``cli``)."""
+
+import time
+
+import click
+
+from .cli import (
+    apply_options,
+    config_option,
+    finish,
+    guarded_files,
+    output_options,
+    parse_view,
+    read_sphere_init,
+    render_settings,
+    run_options,
+    session_options,
+    solve,
+    write_outputs,
+)
+from .errors import StippleError
+from .outputs import PROJECTIONS
+
+
+def design_options(function):
+    own = [
+        config_option(),
+        click.option(
+            "-t", "--strength", type=int, required=True, help="Degree t: integrate every harmonic of degree <= t."
+        ),
+        click.option(
+            "-M",
+            "--points",
+            "n_points",
+            type=int,
+            default=None,
+            help="Number of points (default: ceil(0.55 (t+1)^2); (t+1)^2 converges in about 50 iterations).",
+        ),
+        click.option(
+            "--error",
+            type=float,
+            default=1e-10,
+            show_default=True,
+            help="Stop when every harmonic's quadrature error is at most this.",
+        ),
+        click.option(
+            "--init",
+            default="auto",
+            show_default=True,
+            help="Start: 'lattice' (jittered Fibonacci), 'uniform' (i.i.d.), 'auto' (lattice from 0.65 (t+1)^2 "
+            "points on; README), or a CSV of lon,lat or x,y,z.",
+        ),
+        click.option(
+            "--coords", type=click.Choice(["lonlat", "xyz"]), default="xyz", show_default=True, help="CSV columns."
+        ),
+        click.option("--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True),
+        click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees)."),
+    ]
+    return apply_options(function, own + run_options(iterations=20000) + output_options() + session_options())
+
+
+@click.command()
+@design_options
+@click.pass_context
+def design(ctx, **options):
+    """A numerical spherical design of strength t: M points whose equal-weight rule integrates every spherical
+    harmonic of degree 1..t to within --error (CSV in full precision)."""
+    from .design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
+    from .outputs import sphere_output
+    from .sphere import lon_lat
+
+    started = time.perf_counter()
+    try:
+        if not 0 < options["error"] < 1:
+            raise StippleError(f"error must be a number in (0, 1), not {options['error']!r}")
+        settings = render_settings(options)
+        view = parse_view(options["view"])
+        init_file = [] if options["init"] in STARTS else [("--init file", options["init"])]
+        with guarded_files(init_file, options["outputs"], options["checkpoint"]):
+            problem = design_problem(
+                options["strength"],
+                options["n_points"],
+                threads=options["threads"],
+                epsilon=1e-12 if options["epsilon"] is None else options["epsilon"],
+            )
+            target = ErrorTarget(problem.discrepancy, options["error"])
+            options.update(tol=GRADIENT_FLOOR, safeguard=False)
+            init = options["init"] if options["init"] in STARTS else read_sphere_init(options["init"])
+            init = start_points(options["strength"], problem.n_points, init, options["seed"])
+            result, stopped_by = solve(problem, options, init, stop=target)
+            result = design_outcome(result, target)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: sphere_output(
+                    result.points,
+                    lon_lat(result.points),
+                    fmt,
+                    coords=options["coords"],
+                    projection=options["projection"],
+                    view=view,
+                    ink=1.0,
+                    **settings,
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)
