@@ -48,18 +48,23 @@ def measure(rgb, n_points, iterations, union_weight):
             }
         )
     union = sum(layer.density for layer in layers)
-    return layers, problem, result, {
-        "union_weight": union_weight,
-        "iterations": result.iterations,
-        "seconds": seconds,
-        "status": result.message,
-        "inks": inks,
-        "union": {
-            "bandwidth": problem.bandwidth,
-            "energy_ratio_to_iid": discrepancy_energy(problem, result.points) / expected_iid_energy(problem),
-            **torus_clumps(result.points, union)["neighbour_distance_over_hexagonal"],
+    return (
+        layers,
+        problem,
+        result,
+        {
+            "union_weight": union_weight,
+            "iterations": result.iterations,
+            "seconds": seconds,
+            "status": result.message,
+            "inks": inks,
+            "union": {
+                "bandwidth": problem.bandwidth,
+                "energy_ratio_to_iid": discrepancy_energy(problem, result.points) / expected_iid_energy(problem),
+                **torus_clumps(result.points, union)["neighbour_distance_over_hexagonal"],
+            },
         },
-    }
+    )
 
 
 def pictures(layers, problem, result, shape, directory):

@@ -5,15 +5,20 @@ median seconds per iteration (over ``--iterations`` iterations after as many fro
 ones, where the dots still travel far), median seconds of the raw transforms of one iteration (measured in the
 same run), their ratio, transform counts per iteration, the process's peak memory so far, and library versions.
 Each near-field case is run beside the same problem without it. Quote medians; compare ratios within one run.
+Scale cases (``bench/scale.py``, one process each, with its own peak memory): the torus with M = 10^6 on a
+1024² image (default N), and spherical designs of strength 200 (default M) and 1000 (M = 1,002,000) timed to
+their target (largest error 1e-10).
 """
 
 import argparse
 import json
 import platform
 import resource
+import subprocess
 import sys
 import time
 from importlib.metadata import version
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +31,9 @@ from stipple.transforms import alm_size, spherical_angles
 TORUS_CASES = [(30150, 650), (200000, 1300)]
 SPHERE_CASES = [(200000, 1000)]
 PEAKED_CASES = [(10000, None)]  # M, N (None: the default chosen from the density)
+# Scale cases, each in its own process (bench/scale.py) so that each reports its own peak memory.
+SCALE_CASES = [("torus", "1000000", "1024", "5"), ("design", "200", "default"), ("design", "1000", "1002000")]
+QUICK_SCALE_CASES = [("torus", "20000", "256", "3"), ("design", "20", "default")]
 
 
 def gaussian_bump(points, centre=(30.0, 20.0), sigma_degrees=8.0, floor=0.04):
@@ -131,6 +139,13 @@ def case(problem, raw_seconds, name, backend, threads, iterations):
     }
 
 
+def scale_case(arguments):
+    """One case of ``bench/scale.py`` in a fresh process; its JSON line."""
+    script = Path(__file__).with_name("scale.py")
+    completed = subprocess.run([sys.executable, str(script), *arguments], capture_output=True, text=True, check=True)
+    return {"domain": "torus" if arguments[0] == "torus" else "sphere", "scale": True, **json.loads(completed.stdout)}
+
+
 def versions():
     names = ["numpy", "scipy", "ducc0", "finufft", "stipple"]
     return {"python": platform.python_version(), **{name: version(name) for name in names}}
@@ -146,6 +161,7 @@ def main(argv=None):
     portrait = load_density("samples/astronaut256.png")
     topography = CellMap(load_density("samples/topo.npy"))
     results = []
+
     def record(entry):
         results.append(entry)
         print(json.dumps(entry), file=sys.stderr)
@@ -164,6 +180,8 @@ def main(argv=None):
         for near_field in (True, False):
             problem = sphere_problem(gaussian_bump, n_points, bandwidth, threads=args.threads, near_field=near_field)
             record(case(problem, raw_sphere_seconds, "gaussian bump", "ducc0.sht", args.threads, args.iterations))
+    for arguments in QUICK_SCALE_CASES if args.quick else SCALE_CASES:
+        record(scale_case(arguments))
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
     with open(args.output, "w") as stream:
         json.dump(report, stream, indent=2)

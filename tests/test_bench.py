@@ -15,9 +15,14 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
     runpy.run_path(str(ROOT / "bench" / "run.py"), run_name="__main__")
     report = json.loads(output.read_text())
     assert {"ducc0", "finufft", "numpy"} <= set(report["versions"])
-    assert [case["domain"] for case in report["cases"]] == ["torus"] * 3 + ["sphere"] * 4
-    assert [case["near_field"] for case in report["cases"]] == [True, False, True, True, False, True, False]
-    for case in report["cases"]:
+    cases = [case for case in report["cases"] if not case.get("scale")]
+    scale = [case for case in report["cases"] if case.get("scale")]
+    assert [case["domain"] for case in cases] == ["torus"] * 3 + ["sphere"] * 4
+    assert [case["near_field"] for case in cases] == [True, False, True, True, False, True, False]
+    torus, design = scale
+    assert torus["M"] == 20000 and torus["seconds_per_iteration"] > 0 and torus["peak_memory_mb"] > 0
+    assert design["status"] == "converged" and design["iterations_to_target"] > 0 and design["seconds_to_target"] > 0
+    for case in cases:
         assert case["seconds_per_iteration"] > 0 and case["raw_transform_seconds_per_iteration"] > 0
         assert case["seconds_per_iteration_at_start"] > 0
         assert {"M", "N", "threads", "backend", "transforms_per_iteration", "peak_memory_mb"} <= set(case)
