@@ -19,7 +19,7 @@ import numpy as np
 from . import __version__
 from .config import load_config
 from .errors import StippleError
-from .halftone import MAX_POINTS, check_integer
+from .halftone import INITS, MAX_POINTS, check_integer
 from .inputs import load_density
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
 from .plotter import DOT_STYLES
@@ -261,7 +261,8 @@ def common_options(function):
             type=float,
             default=1e-4,
             show_default=True,
-            help="Stop when the gradient norm falls to this fraction of the initial one.",
+            help="Stop when the gradient norm falls to this fraction of the initial one (for the torus's stratified "
+            "start: of the one at i.i.d. density samples).",
         ),
         click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option(
@@ -421,7 +422,7 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=()):
 
 def init_input(init):
     """The ``--init`` value as an input file role, or None for ``density`` / ``uniform``."""
-    return None if init in ("density", "uniform") else ("--init file", init)
+    return None if init in INITS else ("--init file", init)
 
 
 def write_outputs(paths, render):
@@ -505,9 +506,10 @@ def main():
 @common_options
 @click.option(
     "--init",
-    default="density",
+    default="stratified",
     show_default=True,
-    help="Start: 'density' (i.i.d. from the image), 'uniform', or a CSV of x,y pixel positions.",
+    help="Start: 'stratified' (the image's dots shared out along a Hilbert curve), 'density' (i.i.d. from the "
+    "image), 'uniform', or a CSV of x,y pixel positions.",
 )
 @click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
 @click.option(
@@ -651,8 +653,8 @@ def solve_line(weights, options, init):
 
 
 def read_torus_init(init, shape):
-    """``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
-    if init in ("density", "uniform"):
+    """``stratified``/``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
+    if init in INITS:
         return init
     domain, pixels = read_points(init)
     if domain != "torus":
@@ -794,7 +796,7 @@ def load_sphere_density(source, options):
 
 def read_sphere_init(init):
     """``density``/``uniform``, or a CSV of ``lon,lat`` degrees or ``x,y,z`` as unit vectors."""
-    if init in ("density", "uniform"):
+    if init in INITS:
         return init
     domain, points = read_points(init)
     if domain != "sphere":

@@ -16,6 +16,7 @@ from .cli import (
     write_outputs,
 )
 from .errors import StippleError
+from .halftone import INITS
 from .outputs import output_format
 from .transforms import BACKENDS
 
@@ -24,7 +25,7 @@ from .transforms import BACKENDS
 @click.argument("image", required=False)
 @common_options
 @palette_options("cmyk")
-@click.option("--init", type=click.Choice(("density", "uniform")), default="density", show_default=True)
+@click.option("--init", type=click.Choice(INITS), default="density", show_default=True)
 @click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
 @click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
 @click.pass_context
@@ -85,8 +86,11 @@ def run_colour(image, options, started):
 
 def check_colour_options(options):
     """Options of the shared set that have no meaning for colour separation are refused, not ignored."""
-    if options["init"] not in ("density", "uniform"):
-        raise StippleError("--init must be density or uniform for colour separation (a start CSV is for one class)")
+    if options["init"] not in INITS:
+        raise StippleError(
+            "--init must be stratified, density or uniform for colour separation (a start CSV is for one class); "
+            "stratified starts from i.i.d. samples of each ink"
+        )
     if options["invert"] or options["value_range"] is not None:
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
     if options["gamma"] != 1.0:

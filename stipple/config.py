@@ -80,5 +80,6 @@ def _resolve_paths(base, value):
     """Paths in a config are relative to its folder; ``-``, keywords and ``builtin:`` names stay as they are."""
     if isinstance(value, tuple):
         return tuple(_resolve_paths(base, item) for item in value)
-    keep = value is None or value in ("-", "density", "uniform") or value.startswith("builtin:")
+    keywords = ("-", "stratified", "density", "uniform", "auto", "lattice")
+    keep = value is None or value in keywords or value.startswith("builtin:")
     return value if keep or os.path.isabs(value) else os.path.join(base, value)

@@ -11,7 +11,7 @@ from .optimize import OptimizeResult, initial_state, minimize
 
 MAX_POINTS = 20_000_000
 MAX_BANDWIDTH = 8192
-INITS = ("density", "uniform")
+INITS = ("stratified", "density", "uniform")
 
 
 @dataclass
@@ -19,8 +19,9 @@ class Problem:
     """A halftoning problem ready to optimise.
 
     ``objective`` is what CG minimises; ``discrepancy`` its transform part (the whole objective without a near
-    field), which evaluation uses for ``E_N``. ``sample(rng, count)`` draws i.i.d. points from the density;
-    ``settings`` are the values that define the problem (compared when a checkpoint is resumed).
+    field), which evaluation uses for ``E_N``. ``sample(rng, count)`` draws i.i.d. points from the density and
+    ``stratified(rng, count)``, where the domain has one, points stratified over it; ``settings`` are the values
+    that define the problem (compared when a checkpoint is resumed).
     """
 
     domain: str
@@ -31,6 +32,7 @@ class Problem:
     bandwidth: int
     sample: object
     settings: dict
+    stratified: object = None
 
 
 @dataclass
@@ -126,7 +128,9 @@ def initial_points(problem, init, rng):
     if isinstance(init, str):
         if init not in INITS:
             raise StippleError(f"init must be one of {', '.join(INITS)} or an array, not {init!r}")
-        if init == "density":
+        if init == "stratified" and problem.stratified is not None:
+            return problem.stratified(rng, problem.n_points)
+        if init in ("stratified", "density"):
             return problem.sample(rng, problem.n_points)
         return problem.manifold.random(rng, problem.n_points)
     points = np.asarray(init, dtype=np.float64)
@@ -141,7 +145,7 @@ def initial_points(problem, init, rng):
 def run(
     problem,
     *,
-    init="density",
+    init="stratified",
     seed=0,
     tol=1e-4,
     iterations=2000,
@@ -159,8 +163,11 @@ def run(
     Parameters
     ----------
     problem : Problem
-    init : {"density", "uniform"} or array
-        Starting points: i.i.d. from the density (default), uniform, or given (internal coordinates).
+    init : {"stratified", "density", "uniform"} or array
+        Starting points: stratified over the density where the domain has such a sampler (the torus: along a
+        Hilbert curve through the pixels; default), otherwise and with "density" i.i.d. from the density, i.i.d.
+        uniform, or given (internal coordinates). ``tol`` is relative to the gradient norm at the start, and for
+        the stratified start to that at i.i.d. density samples, so that it means the same for both.
     seed : int
         Seed of the random start.
     tol, iterations, time_limit, restart_every, safeguard, callback :
@@ -188,7 +195,12 @@ def run(
         state = load_checkpoint(checkpoint, problem)
     else:
         rng = np.random.default_rng(seed)
-        state = initial_state(problem.objective, problem.manifold, initial_points(problem, init, rng))
+        start = initial_points(problem, init, rng)
+        reference = None
+        if isinstance(init, str) and init == "stratified" and problem.stratified is not None:
+            reference = gradient_norm(problem, problem.sample(rng, problem.n_points))
+        state = initial_state(problem.objective, problem.manifold, start)
+        state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
         state.rng_state = json.dumps(rng.bit_generator.state)
     outcome = minimize(
         problem.objective,
@@ -206,6 +218,12 @@ def run(
     return HalftoneResult(
         **{item.name: getattr(outcome, item.name) for item in fields(outcome)}, bandwidth=problem.bandwidth
     )
+
+
+def gradient_norm(problem, points):
+    """Norm of the objective's gradient at ``points`` (leaves the objective there)."""
+    problem.objective.set_points(points)
+    return problem.manifold.norm(points, problem.manifold.riesz(points, problem.objective.gradient()))
 
 
 def _chain(*callbacks):

@@ -22,7 +22,8 @@ from .halftone import HalftoneResult, Problem, check_count, check_positive, run
 from .manifolds import Torus
 from .nearfield import NearField, TorusPairs
 from .objective import SumObjective
-from .torus import check_weights, sample_image, torus_near_kernel, torus_problem, torus_scale
+from .sampling import hilbert_index, sample_image
+from .torus import check_weights, torus_near_kernel, torus_problem, torus_scale
 
 # Default length: L = LENGTH_FACTOR sqrt(M W H) pixels, so that the vertex spacing h = L/M is a quarter of the
 # mean stroke spacing W H / L (four vertices along the curve per stroke spacing across it).
@@ -227,23 +228,6 @@ def penalty_scale(discrepancy, n_vertices):
     slope, so ``lam² M`` (with ``m`` the density's mass) sets the scale.
     """
     return float(discrepancy.weight**2 * n_vertices)
-
-
-def hilbert_index(x, y, order=16):
-    """Index along the Hilbert curve of the ``2^order`` grid of integer cells ``(x, y)``."""
-    side = 1 << order
-    x, y = np.array(x, dtype=np.int64), np.array(y, dtype=np.int64)
-    index = np.zeros(len(x), dtype=np.int64)
-    s = side >> 1
-    while s > 0:
-        rx, ry = (x & s) > 0, (y & s) > 0
-        index += s * s * ((3 * rx) ^ ry)
-        flip = ~ry & rx
-        x[flip], y[flip] = s - 1 - x[flip], s - 1 - y[flip]
-        swap = ~ry
-        x[swap], y[swap] = y[swap], x[swap].copy()
-        s >>= 1
-    return index
 
 
 def closed_length(points):

@@ -143,15 +143,15 @@ class NearField:
         Pairs are kept in index order (``_ordered``). Pairs within ``radius (1 + skin)`` at the reference
         positions contain every pair now within the radius unless one of its points moved more than
         ``radius skin / 2`` (a "mover"). Pairs of movers are taken again from the reference tree (around their
-        current positions) and among themselves; the whole list is searched again when movers are more than
-        1 % of the points (at most 256).
+        current positions) and among themselves (a small tree of the movers); the whole list is searched again
+        when movers are more than 1 % of the points (at least 16).
         """
         if self._reference is None or len(self._reference) != len(positions):
             return self._search(positions)
         moved = self.geometry.displacement(positions, self._reference)
         limit = self.kernel.radius * self.skin / 2
         movers = np.flatnonzero(np.einsum("ij,ij->i", moved, moved) > limit**2)
-        if movers.size > min(max(16, 0.01 * len(positions)), 256):
+        if movers.size > max(16, 0.01 * len(positions)):
             return self._search(positions)
         first, second = self._verlet
         if movers.size == 0:
@@ -164,7 +164,8 @@ class NearField:
         near_first = np.repeat(movers, [len(items) for items in found])
         near_second = np.concatenate([np.asarray(items, dtype=np.intp) for items in found] + [np.empty(0, np.intp)])
         others = ~is_mover[near_second]
-        among_first, among_second = np.triu_indices(movers.size, 1)
+        among = self.geometry.tree(positions[movers]).query_pairs(self.kernel.radius + limit, output_type="ndarray")
+        among_first, among_second = among[:, 0], among[:, 1]
         added = _ordered(
             np.concatenate([near_first[others], movers[among_first]]),
             np.concatenate([near_second[others], movers[among_second]]),

@@ -22,6 +22,7 @@ from .kernels import NearKernel, ball_kernel, ball_profile
 from .manifolds import Torus
 from .nearfield import NearField, TorusPairs
 from .objective import Discrepancy, SumObjective
+from .sampling import sample_image, stratified_sample
 from .transforms import BACKENDS, TorusFourier, make_nufft, torus_modes
 
 DEFAULT_EPSILON = 1e-9
@@ -103,17 +104,6 @@ def torus_kernel(bandwidths, scale):
     return kernel
 
 
-def sample_image(weights, rng, count):
-    """``count`` i.i.d. points in [0, 1)² with density proportional to the pixel-constant ``weights``."""
-    rows, columns = weights.shape
-    cumulative = np.cumsum(weights.ravel())
-    cells = np.searchsorted(cumulative, rng.random(count) * cumulative[-1], side="right")
-    cells = np.minimum(cells, weights.size - 1)
-    row, column = np.divmod(cells, columns)
-    offsets = rng.random((count, 2))
-    return np.stack([(column + offsets[:, 0]) / columns, (row + offsets[:, 1]) / rows], axis=1)
-
-
 def check_weights(weights):
     weights = check_grid(np.asarray(weights, dtype=np.float64), "weights")
     if np.any(weights < 0):
@@ -168,6 +158,7 @@ def torus_problem(
         n_points=n_points,
         bandwidth=bandwidth,
         sample=lambda rng, count: sample_image(weights, rng, count),
+        stratified=lambda rng, count: stratified_sample(weights, rng, count),
         settings={
             "domain": "torus",
             "points": n_points,

@@ -106,7 +106,7 @@ def test_evaluate_cli_our_points_beat_iid_on_the_portrait(tmp_path):
     iid = tmp_path / "iid.csv"
     common = ["torus", str(portrait), "-M", "4000", "-q", "--threads", "2"]
     assert runner.invoke(main, common + ["--iterations", "150", "-o", str(ours)]).exit_code == 0
-    assert runner.invoke(main, common + ["--iterations", "0", "-o", str(iid)]).exit_code == 0
+    assert runner.invoke(main, common + ["--iterations", "0", "--init", "density", "-o", str(iid)]).exit_code == 0
     import json
 
     reports = []

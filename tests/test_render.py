@@ -71,7 +71,8 @@ def test_render_rejects_unknown_csv(tmp_path):
 
 def test_order_shortens_the_pen_path(torus_csv, tmp_path):
     image, _ = torus_csv
-    result = run(["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "--order", "-o", tmp_path / "o.csv"])
+    arguments = ["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "--init", "density", "--order"]
+    result = run(arguments + ["-o", tmp_path / "o.csv"])
     assert result.exit_code == 0
     line = [text for text in result.output.splitlines() if "pen-up travel" in text][0]
     before, after = (float(value) for value in line.split("travel ")[1].split(" mm")[0].split(" -> "))

@@ -7,6 +7,7 @@ from stipple.torus import (
     halftone_torus,
     image_coefficients,
     sample_image,
+    stratified_sample,
     torus_problem,
 )
 from stipple.transforms import torus_modes
@@ -69,8 +70,8 @@ def test_samples_follow_the_image():
 
 def test_halftone_decreases_energy_monotonically_and_is_reproducible(rng):
     weights = np.outer(np.linspace(0.1, 1, 24), np.linspace(1, 0.2, 32))
-    first = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3)
-    second = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3)
+    first = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3, init="density")
+    second = halftone_torus(weights, 300, 40, iterations=60, tol=1e-12, threads=1, seed=3, init="density")
     assert first.iterations == 60
     np.testing.assert_array_equal(first.points, second.points)
     rises = np.diff(first.energies) / first.energies[:-1]
@@ -90,7 +91,7 @@ def test_backends_reach_the_same_energy():
 
 def test_full_hessian_also_descends():
     weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
-    result = halftone_torus(weights, 200, 30, iterations=30, tol=1e-12, threads=1, hessian="full")
+    result = halftone_torus(weights, 200, 30, iterations=30, tol=1e-12, threads=1, hessian="full", init="density")
     assert result.energies[-1] < 0.2 * result.energies[0]
 
 
@@ -99,3 +100,33 @@ def test_stops_at_tolerance():
     result = halftone_torus(weights, 100, 16, iterations=5000, tol=1e-2, threads=1)
     assert result.status == "converged"
     assert result.relative_gradient_norm <= 1e-2
+
+
+def test_stratified_start_gives_every_quadrant_its_share(rng):
+    """Quadrants (and their quadrants) of a power-of-two image are stretches of the Hilbert curve, so each gets its
+    share of the dots to within 2; i.i.d. samples miss by about sqrt(count)."""
+    weights = rng.random((64, 64)) ** 3
+    count = 4000
+    points = stratified_sample(weights, rng, count)
+    iid = sample_image(weights, rng, count)
+    worst = {"stratified": 0.0, "iid": 0.0}
+    for blocks in (2, 4, 8):
+        size = 64 // blocks
+        mass = weights.reshape(blocks, size, blocks, size).sum(axis=(1, 3)) / weights.sum()
+        for name, sample in (("stratified", points), ("iid", iid)):
+            cells = np.floor(sample * blocks).astype(int)
+            counts = np.zeros((blocks, blocks))
+            np.add.at(counts, (cells[:, 1], cells[:, 0]), 1)
+            worst[name] = max(worst[name], np.abs(counts - count * mass).max())
+    assert worst["stratified"] <= 2
+    assert worst["iid"] > 10
+
+
+def test_stratified_start_is_the_default_and_tol_refers_to_iid_samples():
+    weights = np.outer(np.linspace(0.1, 1, 24), np.linspace(1, 0.2, 32))
+    stratified = halftone_torus(weights, 300, 40, iterations=0, threads=1, seed=3)
+    iid = halftone_torus(weights, 300, 40, iterations=0, threads=1, seed=3, init="density")
+    assert stratified.energies[0] < 0.5 * iid.energies[0]
+    # The reference gradient is that of i.i.d. samples, so the stratified start is already part of the way.
+    assert stratified.relative_gradient_norm < 0.5
+    assert iid.relative_gradient_norm == 1.0

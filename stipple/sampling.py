@@ -1,0 +1,55 @@
+"""Starting points drawn from a pixel image: i.i.d., or stratified along a Hilbert curve."""
+
+import numpy as np
+
+
+def hilbert_index(x, y, order=16):
+    """Index along the Hilbert curve of the ``2^order`` grid of integer cells ``(x, y)``."""
+    side = 1 << order
+    x, y = np.array(x, dtype=np.int64), np.array(y, dtype=np.int64)
+    index = np.zeros(len(x), dtype=np.int64)
+    s = side >> 1
+    while s > 0:
+        rx, ry = (x & s) > 0, (y & s) > 0
+        index += s * s * ((3 * rx) ^ ry)
+        flip = ~ry & rx
+        x[flip], y[flip] = s - 1 - x[flip], s - 1 - y[flip]
+        swap = ~ry
+        x[swap], y[swap] = y[swap], x[swap].copy()
+        s >>= 1
+    return index
+
+
+def sample_image(weights, rng, count):
+    """``count`` i.i.d. points in [0, 1)² with density proportional to the pixel-constant ``weights``."""
+    return _points_in_cells(weights, rng, _cells_at(weights, np.arange(weights.size), rng.random(count)))
+
+
+def stratified_sample(weights, rng, count):
+    """``count`` points in [0, 1)² with density ``weights``, stratified along a Hilbert curve through the pixels.
+
+    The pixels are taken in Hilbert-curve order and point ``i`` is drawn from the ``i``-th of ``count`` equal
+    slices of the mass along that order (at a uniform position inside its slice), so every stretch of the curve,
+    and hence every region the curve fills, gets its share of the dots to within one. Within a pixel the position
+    is uniform, so there is no lattice for the optimiser to inherit.
+    """
+    rows, columns = weights.shape
+    order = max(1, int(np.ceil(np.log2(max(rows, columns)))))
+    row, column = np.divmod(np.arange(weights.size), columns)
+    along_curve = np.argsort(hilbert_index(column, row, order), kind="stable")
+    fractions = (np.arange(count) + rng.random(count)) / count
+    return _points_in_cells(weights, rng, _cells_at(weights, along_curve, fractions))
+
+
+def _cells_at(weights, cell_order, fractions):
+    """The cells (flat indices) at the given fractions of the mass, accumulated over cells in ``cell_order``."""
+    cumulative = np.cumsum(weights.ravel()[cell_order])
+    positions = np.searchsorted(cumulative, fractions * cumulative[-1], side="right")
+    return cell_order[np.minimum(positions, weights.size - 1)]
+
+
+def _points_in_cells(weights, rng, cells):
+    rows, columns = weights.shape
+    row, column = np.divmod(cells, columns)
+    offsets = rng.random((len(cells), 2))
+    return np.stack([(column + offsets[:, 0]) / columns, (row + offsets[:, 1]) / rows], axis=1)
