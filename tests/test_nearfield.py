@@ -156,6 +156,26 @@ def test_pair_sums_match_all_pairs_also_after_moves(rng):
     assert 1 < field.counts["pair_searches"] < 6
 
 
+def test_many_movers_are_patched_with_the_pairs_among_them(rng):
+    """Up to 1 % of the points may move far between searches (300 of 30000 here, many of them close together):
+    the patched list must hold exactly the pairs a fresh search finds, in the same order."""
+    kernel = NearKernel(ball_profile, 0.004)
+    field = NearField(kernel, weight=1.0, geometry=TorusPairs(np.ones(2)))
+    fresh = NearField(kernel, weight=1.0, geometry=TorusPairs(np.ones(2)))
+    points = rng.random((30000, 2))
+    field.set_points(points)
+    movers = rng.choice(30000, 300, replace=False)
+    points = points.copy()
+    points[movers] = 0.5 + 0.02 * rng.random((300, 2))  # a dense cluster: many mover-mover pairs
+    field.set_points(points)
+    fresh.set_points(points)
+    assert field.counts["pair_searches"] == 1
+    for mine, theirs in zip(field._pairs[:2], fresh._pairs[:2], strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+    assert field.pair_count > 1000
+    assert field.energy() == fresh.energy()
+
+
 def test_sphere_pair_sums_match_all_pairs(rng):
     kernel = NearKernel(chord_profile, 0.2)
     field = NearField(kernel, weight=1.0, geometry=SpherePairs())
