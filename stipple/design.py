@@ -34,9 +34,17 @@ LATTICE_JITTER = 0.1
 STARTS = ("auto", "lattice", "uniform")
 
 
+# Hardin & Sloane (1996): for these strengths designs are known to exist for every number of points from this
+# one on, while some smaller sizes have none (no 2-design with 5 points, 3-design with 9, 6-design with 27,
+# which are exactly where ceil(0.55 (t+1)^2) stalled at a local minimum among t = 1..60).
+EVERY_SIZE_FROM = {2: 6, 3: 10, 4: 16, 5: 22, 6: 28, 7: 36, 8: 44, 9: 54, 10: 64, 11: 74, 12: 86}
+
+
 def design_points(strength):
-    """Default number of points for strength t: ``ceil(0.55 (t+1)^2)``."""
-    return int(np.ceil(POINTS_PER_HARMONIC * (check_strength(strength) + 1) ** 2))
+    """Default number of points for strength t: ``ceil(0.55 (t+1)^2)``, and for t <= 12 at least the size from
+    which Hardin & Sloane found designs of every size."""
+    strength = check_strength(strength)
+    return max(int(np.ceil(POINTS_PER_HARMONIC * (strength + 1) ** 2)), EVERY_SIZE_FROM.get(strength, 0))
 
 
 def check_strength(strength):
@@ -164,6 +172,12 @@ def design_outcome(result, target):
     if target.reached:
         result.status = "converged"
         result.message = f"largest error {target.largest:.3g} <= {target.error:g} after {result.iterations} iterations"
-    else:
-        result.message += f"; largest error {target.largest:.3g} > target {target.error:g}"
+        return result
+    if result.status == "converged":  # the gradient vanished away from a design: a local minimum
+        result.status = "stalled"
+        result.message = (
+            f"stalled at a local minimum after {result.iterations} iterations (not a design; for small t some "
+            "numbers of points have none: try more points or another --seed)"
+        )
+    result.message += f"; largest error {target.largest:.3g} > target {target.error:g}"
     return result

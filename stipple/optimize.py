@@ -10,7 +10,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-STATUSES = ("converged", "max_iterations", "time_limit", "stopped", "no_descent")
+# "stalled" is set by callers whose goal is more than a small gradient (spherical designs).
+STATUSES = ("converged", "max_iterations", "time_limit", "stopped", "no_descent", "stalled")
 
 
 @dataclass

@@ -61,7 +61,7 @@ def separation(points):
 def test_default_design_is_a_design_by_the_addition_theorem():
     result = spherical_design(12, threads=1)
     assert result.status == "converged", result.message
-    assert len(result.points) == design_points(12) == int(np.ceil(0.55 * 13**2))
+    assert len(result.points) == design_points(12) == 93 == int(np.ceil(0.55 * 13**2))
     errors = harmonic_errors(result.points, 12)
     assert errors.max() < 1e-10
     # Not a design of a higher strength: the check can fail.
@@ -95,6 +95,16 @@ def test_many_points_start_on_the_lattice_and_stay_separated():
     assert harmonic_errors(result.points, strength).max() < 1e-10
     assert separation(result.points) > 0.3
     assert start_points(strength, design_points(strength), "auto") == "uniform"
+
+
+def test_sizes_without_a_design_stall_and_say_so():
+    """No 6-design has 27 points (Hardin & Sloane): CG stops at a local minimum, which is not called converged."""
+    result = spherical_design(6, 27, threads=1)
+    assert result.status == "stalled"
+    assert "not a design" in result.message
+    assert harmonic_errors(result.points, 6).max() > 1e-3
+    assert design_points(6) == 28
+    assert spherical_design(6, threads=1).status == "converged"
 
 
 def test_unreachable_target_says_so():
