@@ -43,20 +43,23 @@ class Discrepancy:
             raise ValueError("hessian='full' is only available on the torus")
         self.fourier = fourier
         self.kernel = kernel
-        self.energy_weights = kernel * fourier.multiplicity
+        # Weights in sums over the whole spectrum; on the torus (multiplicity 1) the kernel itself, not a copy:
+        # at M = 10^6 every mode-grid array is 112-224 MB.
+        self.energy_weights = _times_multiplicity(kernel, fourier.multiplicity)
         self._pair_weights = np.repeat(np.broadcast_to(self.energy_weights, np.shape(target)).ravel(), 2)
         self._jacobian_weights = weight * kernel
         self.target = target
         self.weight = weight
         self.hessian = hessian
-        self.cross_kernel = np.zeros_like(kernel) if cross_kernel is None else cross_kernel
-        self.bandlimited_weights = (kernel + self.cross_kernel) * fourier.multiplicity
-        self._has_cross = bool(self.cross_kernel.any())
-        self._cross_pull = self.cross_kernel * target
-        # -sum mult k^near (|w|^2 + 2 Re conj(F) w): a constant and one real dot product with F per evaluation.
-        weighted_pull = np.broadcast_to(self.cross_kernel * fourier.multiplicity, np.shape(target)) * target
-        self._cross_constant = -float(np.sum(weighted_pull.conj() * target).real)
-        self._cross_dot = -2 * _real_view(np.ascontiguousarray(weighted_pull, dtype=np.complex128))
+        # Without a split the near part is the scalar 0 (no mode-grid arrays of zeros).
+        self.cross_kernel = 0.0 if cross_kernel is None else cross_kernel
+        self._has_cross = bool(np.any(self.cross_kernel))
+        self._cross_pull = self.cross_kernel * target if self._has_cross else 0.0
+        if self._has_cross:
+            # -sum mult k^near (|w|^2 + 2 Re conj(F) w): a constant and one real dot product with F per evaluation.
+            weighted_pull = _times_multiplicity(self._cross_pull, fourier.multiplicity)
+            self._cross_constant = -float(np.sum(weighted_pull.conj() * target).real)
+            self._cross_dot = _real_view(np.ascontiguousarray(weighted_pull, dtype=np.complex128))
         self._residual = None
 
     def set_points(self, points):
@@ -81,11 +84,17 @@ class Discrepancy:
         quadratic = float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
         if not self._has_cross:
             return quadratic
-        return quadratic + self._cross_constant + float(np.einsum("i,i->", self._cross_dot, _real_view(self._residual)))
+        cross = -2 * float(np.einsum("i,i->", self._cross_dot, _real_view(self._residual)))
+        return quadratic + self._cross_constant + cross
 
     def bandlimited_energy(self):
         """The paper's ``E_N = sum_l mult_l k_l |F_l|^2`` with the whole kernel ``k = k^R + k^near``."""
         return float(np.sum(self.bandlimited_weights * np.abs(self._residual) ** 2))
+
+    @property
+    def bandlimited_weights(self):
+        """``mult_l (k^R_l + k^near_l)``: the whole kernel's weights (made when asked, not kept)."""
+        return _times_multiplicity(self.kernel + self.cross_kernel, self.fourier.multiplicity)
 
     def _synthesis_coeffs(self):
         """``k^R F - k^near w``: the coefficients whose gradient synthesis is ``dE/dp / (2 lam)``."""
@@ -121,6 +130,13 @@ class Discrepancy:
             curvature = 2 * self.weight * self.fourier.hessian_synthesis(self._synthesis_coeffs())
             products = [hv + np.einsum("mij,mj->mi", curvature, v) for hv, v in zip(products, vectors, strict=True)]
         return products
+
+
+def _times_multiplicity(values, multiplicity):
+    """``values * multiplicity``, or ``values`` itself where the multiplicity is the scalar 1."""
+    if np.ndim(multiplicity) == 0 and multiplicity == 1:
+        return values
+    return values * multiplicity
 
 
 def _real_view(coeffs):
