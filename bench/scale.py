@@ -21,6 +21,15 @@ from stipple.torus import torus_problem
 
 
 def peak_memory_mb():
+    """This process's peak resident memory: ``VmHWM`` (Linux keeps ``ru_maxrss`` across exec, so a child of a big
+    process would report its parent's size), else ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
