@@ -437,9 +437,9 @@ def solve(problem, options, init, stop=None):
     that ends the run by returning True)."""
     from .halftone import run
 
-    seconds, iterations = parse_every(options["checkpoint_every"])
     verbose = options["verbose"] and not options["quiet"]
-    if verbose:
+
+    def announce():
         fourier = problem.discrepancy.fourier
         transforms = getattr(fourier, "nufft", fourier)
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
@@ -448,28 +448,26 @@ def solve(problem, options, init, stop=None):
             f"tol={options['tol']:g}, iterations<={options['iterations']}",
             err=True,
         )
-    check_integer("seed", options["seed"], 0, 2**63 - 1)
-    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
-    with SIGNALS.deferred() as interruption:
-        try:
-            result = run(
-                problem,
-                init=init,
-                seed=options["seed"],
-                tol=options["tol"],
-                iterations=options["iterations"],
-                time_limit=options["time_limit"],
-                safeguard=options["safeguard"],
-                callback=lambda state: any(
-                    [progress(state), interruption.stop_requested(state), bool(stop and stop(state))]
-                ),
-                checkpoint=options["checkpoint"],
-                checkpoint_seconds=seconds,
-                checkpoint_iterations=iterations,
-                resume=options["resume"],
-            )
-        finally:
-            progress.close()
+
+    result, stopped_by = supervised(
+        options,
+        lambda callback, seconds, iterations: run(
+            problem,
+            init=init,
+            seed=options["seed"],
+            tol=options["tol"],
+            iterations=options["iterations"],
+            time_limit=options["time_limit"],
+            safeguard=options["safeguard"],
+            callback=callback,
+            checkpoint=options["checkpoint"],
+            checkpoint_seconds=seconds,
+            checkpoint_iterations=iterations,
+            resume=options["resume"],
+        ),
+        stop,
+        announce if verbose else None,
+    )
     if verbose and len(result.energies) > 1:
         rises = int(np.sum(np.diff(result.energies) > 0))
         click.echo(
@@ -477,6 +475,28 @@ def solve(problem, options, init, stop=None):
             f"energy {result.energies[0]:.4e} -> {result.energy:.4e} ({rises} rises)",
             err=True,
         )
+    return result, stopped_by
+
+
+def supervised(options, launch, stop=None, announce=None):
+    """``launch(callback, checkpoint_seconds, checkpoint_iterations)`` under the CLI's progress bar and signal
+    handling; the callback also ends the run when ``stop`` returns True, and ``announce()`` reports the settings
+    between the checks of the checkpoint interval and of the seed. Returns the result and the signal that stopped
+    it (or None)."""
+    seconds, iterations = parse_every(options["checkpoint_every"])
+    if announce is not None:
+        announce()
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
+    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
+    with SIGNALS.deferred() as interruption:
+        try:
+            result = launch(
+                lambda state: any([progress(state), interruption.stop_requested(state), bool(stop and stop(state))]),
+                seconds,
+                iterations,
+            )
+        finally:
+            progress.close()
     return result, interruption.signal
 
 
@@ -617,31 +637,27 @@ def solve_line(weights, options, init):
     from .line import draw_line
     from .torus import DEFAULT_EPSILON
 
-    seconds, iterations = parse_every(options["checkpoint_every"])
-    check_integer("seed", options["seed"], 0, 2**63 - 1)
-    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
-    with SIGNALS.deferred() as interruption:
-        try:
-            result = draw_line(
-                weights,
-                options["n_points"],
-                options["length"],
-                options["bandwidth"],
-                seed=options["seed"],
-                init=init,
-                tol=options["tol"],
-                iterations=options["iterations"],
-                time_limit=options["time_limit"],
-                callback=lambda state: progress(state) or interruption.stop_requested(state),
-                checkpoint=options["checkpoint"],
-                checkpoint_seconds=seconds,
-                checkpoint_iterations=iterations,
-                resume=options["resume"],
-                threads=options["threads"],
-                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
-            )
-        finally:
-            progress.close()
+    result, stopped_by = supervised(
+        options,
+        lambda callback, seconds, iterations: draw_line(
+            weights,
+            options["n_points"],
+            options["length"],
+            options["bandwidth"],
+            seed=options["seed"],
+            init=init,
+            tol=options["tol"],
+            iterations=options["iterations"],
+            time_limit=options["time_limit"],
+            callback=callback,
+            checkpoint=options["checkpoint"],
+            checkpoint_seconds=seconds,
+            checkpoint_iterations=iterations,
+            resume=options["resume"],
+            threads=options["threads"],
+            epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+        ),
+    )
     if options["verbose"] and not options["quiet"]:
         segments = result.segment_lengths
         click.echo(
@@ -649,7 +665,7 @@ def solve_line(weights, options, init):
             f"max/mean segment {segments.max() / segments.mean():.4f}",
             err=True,
         )
-    return result, interruption.signal
+    return result, stopped_by
 
 
 def read_torus_init(init, shape):
