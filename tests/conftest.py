@@ -11,3 +11,32 @@ def taylor_slope(function, steps):
     """Least-squares slope of log|remainder| against log(step)."""
     remainders = np.array([abs(function(t)) for t in steps])
     return np.polyfit(np.log(steps), np.log(remainders), 1)[0]
+
+
+def energy_at(objective, points):
+    objective.set_points(points)
+    return objective.energy()
+
+
+def gradient_taylor_slope(objective, points, direction, steps):
+    """Slope of ``|E(p + t d) - E(p) - t <grad E, d>|`` in t (2 for a correct gradient)."""
+    objective.set_points(points)
+    energy, gradient = objective.energy(), objective.gradient()
+    linear = np.sum(gradient * direction)
+    return taylor_slope(lambda t: energy_at(objective, points + t * direction) - energy - t * linear, steps)
+
+
+def hessian_taylor_slope(objective, points, direction, steps):
+    """Slope of the remainder after the quadratic term (3 for a correct Hessian), and ``H d``."""
+    objective.set_points(points)
+    energy, gradient = objective.energy(), objective.gradient()
+    (hess_direction,) = objective.hessian_vectors([direction])
+    linear, quadratic = np.sum(gradient * direction), 0.5 * np.sum(direction * hess_direction)
+
+    def remainder(t):
+        objective_energy = energy_at(objective, points + t * direction)
+        return objective_energy - energy - t * linear - t**2 * quadratic
+
+    slope = taylor_slope(remainder, steps)
+    objective.set_points(points)
+    return slope, hess_direction
