@@ -197,7 +197,7 @@ def run_options(iterations=2000):
             "--threads",
             type=int,
             default=None,
-            help="Transform threads (default: torus 1, bit-reproducible; sphere all CPUs).",
+            help="Transform threads (default: all CPUs; the same thread count gives the same points).",
         ),
         click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
     ]

@@ -13,6 +13,7 @@ from .halftone import (
     check_epsilon,
     check_memory,
     check_threads,
+    default_threads,
     hexagonal_spacing,
     peak_ratio,
     run,
@@ -134,7 +135,7 @@ def torus_problem(
     check_memory(12 * 16 * 1.6 * (bandwidth + 1) ** 2 + 40 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    threads = 1 if threads is None else check_threads(threads)
+    threads = default_threads() if threads is None else check_threads(threads)
     epsilon = check_epsilon(epsilon)
     scale = torus_scale(weights.shape)
     bandwidths = axis_bandwidths(bandwidth, weights.shape)
@@ -197,8 +198,8 @@ def halftone_torus(
     backend : {"ducc0", "finufft"}
         NUFFT library.
     threads : int, optional
-        Threads for the transforms. Default 1: both libraries' multi-threaded type-1 transforms add
-        in a scheduling-dependent order, so only one thread gives bit-for-bit reproducible points.
+        Threads for the transforms (default: all CPUs). The same thread count gives the same points
+        bit for bit (see ``stipple.transforms.ResidueSplitNufft``).
     epsilon : float
         Requested accuracy of the transforms.
     hessian : {"gauss-newton", "full"}

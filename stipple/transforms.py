@@ -14,6 +14,9 @@ Two layers:
   ``multiplicity`` weights each stored coefficient in sums over the whole (real-symmetric) spectrum.
 """
 
+import functools
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
 BACKENDS = ("ducc0", "finufft")
@@ -93,12 +96,78 @@ class FinufftNufft:
         return np.stack([self._plan.execute_adjoint(np.ascontiguousarray(c)) for c in coeffs])
 
 
+class ResidueSplitNufft:
+    """Multi-threaded transforms that give the same bits on every run with the same thread count.
+
+    Both libraries' multi-threaded type-1 transforms add contributions in scheduling order. Here, with ``T``
+    threads, the modes ``n1 = T m + r`` of each residue class ``r`` are one single-threaded type-1 transform of
+    the points ``(T x mod 1, y)`` with values ``v_i exp(-2 pi i o_r x_i)``, because
+    ``exp(-2 pi i n.p) = exp(-2 pi i o_r x) exp(-2 pi i (m', n2).(T x, y))`` with ``n1 = T m' + o_r`` and
+    ``m'`` in the class grid's own centred range. The classes run at once and fill disjoint rows; together they
+    cost one transform's FFT and ``T`` spreads. Type-2 transforms interpolate each point on its own and are
+    deterministic with the backend's threads.
+    """
+
+    def __init__(self, backend_class, shape, epsilon, threads):
+        self.name = backend_class.name
+        self.shape = tuple(shape)
+        self.epsilon = epsilon
+        self.threads = threads
+        self.counts = {"type1": 0, "type2": 0, "set_points": 0}
+        self._full = backend_class(shape, epsilon, threads)
+        self._classes = []
+        half = self.shape[0] // 2
+        for residue in range(threads):
+            low, high = -((half + residue) // threads), (half - residue) // threads
+            size = high - low + 1
+            offset = threads * (low + size // 2) + residue
+            first_row = threads * low + residue + half
+            self._classes.append((offset, first_row, backend_class((size, self.shape[1]), epsilon, 1)))
+        self._phases = None
+
+    def set_points(self, points):
+        self._full.set_points(points)
+        folded = np.array(points, dtype=np.float64)
+        folded[:, 0] = np.mod(self.threads * folded[:, 0], 1.0)
+        for _, _, nufft in self._classes:
+            nufft.set_points(folded)
+        self._phases = [np.exp(-2j * np.pi * offset * points[:, 0]) for offset, _, _ in self._classes]
+        self.counts["set_points"] += 1
+
+    def type1(self, values):
+        self.counts["type1"] += len(values)
+        out = np.empty((len(values),) + self.shape, dtype=np.complex128)
+
+        def one_class(residue):
+            # One task per class: a plan is never used by two threads at once (ducc0's plans are not thread-safe).
+            _, first_row, nufft = self._classes[residue]
+            out[:, first_row :: self.threads] = nufft.type1(values * self._phases[residue])
+
+        list(_thread_pool(self.threads).map(one_class, range(self.threads)))
+        return out
+
+    def type2(self, coeffs):
+        self.counts["type2"] += len(coeffs)
+        return self._full.type2(coeffs)
+
+
+@functools.cache
+def _thread_pool(threads):
+    return ThreadPoolExecutor(threads, thread_name_prefix="stipple-nufft")
+
+
+# Below this many rows per thread, the split costs more than it saves and one thread does all.
+MIN_ROWS_PER_THREAD = 32
+
+
 def make_nufft(backend, shape, epsilon, threads):
-    """The raw NUFFT backend called ``backend`` (one of ``BACKENDS``)."""
+    """The NUFFT backend called ``backend`` (one of ``BACKENDS``), bit-reproducible for a given ``threads``."""
     classes = {"ducc0": Ducc0Nufft, "finufft": FinufftNufft}
     if backend not in classes:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    return classes[backend](shape, epsilon, threads)
+    if threads > 1 and shape[0] >= MIN_ROWS_PER_THREAD * threads:
+        return ResidueSplitNufft(classes[backend], shape, epsilon, threads)
+    return classes[backend](shape, epsilon, 1)
 
 
 def torus_modes(shape):

@@ -1,7 +1,15 @@
 import numpy as np
 import pytest
 
-from stipple.transforms import BACKENDS, TorusFourier, make_nufft, torus_modes
+from stipple.transforms import (
+    BACKENDS,
+    Ducc0Nufft,
+    FinufftNufft,
+    ResidueSplitNufft,
+    TorusFourier,
+    make_nufft,
+    torus_modes,
+)
 
 
 def direct_matrix(points, shape):
@@ -21,6 +29,28 @@ def test_nufft_against_direct_sums(backend, rng):
     coeffs = rng.standard_normal((2,) + shape) + 1j * rng.standard_normal((2,) + shape)
     np.testing.assert_allclose(nufft.type1(values), np.einsum("bm,mxy->bxy", values, matrix), atol=1e-9)
     np.testing.assert_allclose(nufft.type2(coeffs), np.einsum("bxy,mxy->bm", coeffs, matrix.conj()), atol=1e-9)
+
+
+@pytest.mark.parametrize("backend_class", [Ducc0Nufft, FinufftNufft])
+@pytest.mark.parametrize("threads", [2, 3])
+@pytest.mark.parametrize("shape", [(11, 7), (13, 9), (21, 5)])
+def test_residue_split_type1_against_direct_sums(backend_class, threads, shape, rng):
+    """Every residue class of n1 (odd and even half-widths, offsets that need a shift) lands on its own rows."""
+    points = rng.random((60, 2)) * 3 - 1  # outside [0, 1): folding must still be periodic
+    nufft = ResidueSplitNufft(backend_class, shape, 1e-12, threads)
+    nufft.set_points(points)
+    matrix = direct_matrix(points, shape)
+    values = rng.standard_normal((2, 60)) + 1j * rng.standard_normal((2, 60))
+    coeffs = rng.standard_normal((1,) + shape) + 1j * rng.standard_normal((1,) + shape)
+    np.testing.assert_allclose(nufft.type1(values), np.einsum("bm,mxy->bxy", values, matrix), atol=1e-9)
+    np.testing.assert_allclose(nufft.type2(coeffs), np.einsum("bxy,mxy->bm", coeffs, matrix.conj()), atol=1e-9)
+    assert nufft.counts["type1"] == 2 and nufft.counts["type2"] == 1
+
+
+def test_threads_take_the_split_path_only_where_it_pays():
+    assert isinstance(make_nufft("ducc0", (129, 129), 1e-9, 2), ResidueSplitNufft)
+    assert isinstance(make_nufft("ducc0", (33, 33), 1e-9, 2), Ducc0Nufft)
+    assert make_nufft("ducc0", (33, 33), 1e-9, 2).threads == 1
 
 
 def test_backends_agree_on_a_large_problem(rng):
