@@ -21,6 +21,7 @@ from .config import load_config
 from .errors import StippleError
 from .halftone import INITS, MAX_POINTS, check_integer
 from .inputs import load_density
+from .line import LINE_ITERATIONS
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
 from .plotter import DOT_STYLES
 from .transforms import BACKENDS
@@ -250,9 +251,11 @@ def apply_options(function, options):
     return function
 
 
-def common_options(function):
+def common_options(function=None, *, iterations=2000):
     """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
-    the density's transfer, files and outputs."""
+    the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap."""
+    if function is None:
+        return lambda function: common_options(function, iterations=iterations)
     problem = [
         click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
         click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
@@ -285,7 +288,8 @@ def common_options(function):
             help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
         ),
     ]
-    return apply_options(function, [config_option()] + problem + run_options() + output_options() + session_options())
+    runs = run_options(iterations)
+    return apply_options(function, [config_option()] + problem + runs + output_options() + session_options())
 
 
 def load_input(source, **options):
@@ -596,8 +600,8 @@ def torus(ctx, image, **options):
 
 @main.command()
 @click.argument("image", required=False)
-@common_options
-@click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.5 sqrt(M W H)).")
+@common_options(iterations=LINE_ITERATIONS)
+@click.option("--length", type=float, default=None, help="Curve length in pixels (default: sqrt(M W H)).")
 @click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
 @click.pass_context
 def line(ctx, image, **options):

@@ -397,10 +397,14 @@ def curve_energy(problem, points):
 
 
 def evaluate_line(problem, points, weights, pen_width=1.0):
-    """``E_N`` of the curve's vertex measure, the segment statistics, and the drawn line against the image."""
+    """``E_N`` of the curve's vertex measure, the segment statistics, and the drawn line against the image.
+
+    ``points`` are in the image's unit coordinates; ``problem`` is a ``line_problem`` (its torus adds a margin).
+    """
     rows, columns = weights.shape
     pixels = points * np.array([columns, rows])
     segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
+    points = problem.manifold.inward(points)
     energy = discrepancy_energy(problem, points)
     expected = expected_iid_energy(problem)
     return {

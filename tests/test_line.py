@@ -6,6 +6,7 @@ from conftest import gradient_taylor_slope, hessian_taylor_slope
 
 from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import (
+    Rectangle,
     SpeedConstraint,
     default_length,
     draw_line,
@@ -23,8 +24,14 @@ def small_line(rng, hessian="full", penalty=3.0):
     """A 40-vertex loop on a 12×20 image, perturbed so that some segments are stretched and some compressed."""
     weights = rng.random((12, 20))
     problem = line_problem(weights, 40, length=50.0, bandwidth=14, penalty=penalty, epsilon=1e-13, hessian=hessian)
-    points = initial_loop(weights, 40, 50.0, rng) + 0.01 * rng.standard_normal((40, 2))
+    points = problem.manifold.inward(initial_loop(weights, 40, 50.0, rng))
+    points += 0.01 * rng.standard_normal((40, 2)) * image_extent(problem)
     return problem, points
+
+
+def image_extent(problem):
+    """The image's sides in the torus's unit coordinates (the rest is the blank margin)."""
+    return problem.manifold.high - problem.manifold.low
 
 
 def test_every_term_of_the_curve_objective_takes_part(rng):
@@ -38,7 +45,7 @@ def test_every_term_of_the_curve_objective_takes_part(rng):
 def test_curve_objective_gradient_taylor_slope_two(rng):
     problem, points = small_line(rng)
     objective = problem.objective
-    direction = rng.standard_normal(points.shape)
+    direction = rng.standard_normal(points.shape) * image_extent(problem)
     assert gradient_taylor_slope(objective, points, direction, STEPS) == pytest.approx(2, abs=0.1)
 
 
@@ -48,7 +55,7 @@ def test_curve_objective_full_hessian_taylor_slope_three(rng, terms):
     objective = problem.objective
     if terms == "constraints":
         objective = SumObjective(problem.speed)
-    direction = rng.standard_normal(points.shape)
+    direction = rng.standard_normal(points.shape) * image_extent(problem)
     slope, hess_direction = hessian_taylor_slope(objective, points, direction, STEPS)
     assert objective.hessian_gram([direction])[0, 0] == pytest.approx(np.sum(direction * hess_direction), rel=1e-9)
     assert slope == pytest.approx(3, abs=0.15)
@@ -140,3 +147,34 @@ def test_line_on_a_uniform_image_has_nearly_uniform_density(uniform_line):
     assert spread < 0.08
     similarity = fitted_similarity(weights, line_ink(result.points * 48, weights.shape), blurs=(4.0,))
     assert similarity[0]["psnr"] > 25
+
+
+def test_rectangle_maps_the_image_into_its_margin_and_blocks_only_motion_into_a_wall():
+    rectangle = Rectangle(np.ones(2), low=(0.1, 0.2), high=(0.9, 0.7))
+    points = np.array([[0.0, 0.5], [1.0, 1.0], [0.25, 0.75]])
+    inside = rectangle.inward(points)
+    np.testing.assert_allclose(inside, [[0.1, 0.45], [0.9, 0.7], [0.3, 0.575]])
+    np.testing.assert_allclose(rectangle.outward(inside), points)
+    # A gradient g moves a point along -g: the first point rests on the left wall, the second on the right and
+    # bottom walls, the third on none.
+    gradient = np.array([[1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
+    np.testing.assert_array_equal(rectangle.riesz(inside, gradient), [[0.0, 1.0], [0.0, 0.0], [1.0, -1.0]])
+    np.testing.assert_array_equal(rectangle.riesz(inside, -gradient), -gradient)
+    direction = np.array([[-0.5, 0.3], [0.2, -0.1], [0.4, 0.4]])
+    moved = rectangle.transport(inside, np.zeros_like(inside), direction)
+    np.testing.assert_array_equal(moved, [[0.0, 0.3], [0.0, -0.1], [0.4, 0.4]])
+
+
+def test_line_inks_the_rows_along_every_edge():
+    """A dark band along the bottom edge: the rows next to the edge get their share of vertices (the line once
+    left them empty and piled vertices along the opposite, light edge)."""
+    weights = np.full((40, 40), 0.2)
+    weights[30:] = 0.9
+    result = draw_line(weights, 1200, iterations=200, seed=2)
+    rows = result.points[:, 1] * 40
+    expected = {
+        "bottom": 1200 * 2 * 0.9 / weights.sum() * 40,
+        "top": 1200 * 2 * 0.2 / weights.sum() * 40,
+    }
+    assert np.count_nonzero(rows > 38) == pytest.approx(expected["bottom"], rel=0.25)
+    assert np.count_nonzero(rows < 2) == pytest.approx(expected["top"], rel=0.5)
