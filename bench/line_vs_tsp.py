@@ -5,7 +5,7 @@ by LKH-3 (``elkai``, an optional benchmark dependency: ``pip install elkai``). B
 wide at the image's resolution, blurred (sigma 2 and 4 px) and scaled by least squares onto the blurred density
 (``stipple.evaluate.fitted_similarity``). Prints one JSON object per image.
 
-    python bench/line_vs_tsp.py [IMAGE ...] [-M 20000] [--size 256] [--iterations 300] [--png DIR]
+    python bench/line_vs_tsp.py [IMAGE ...] [-M 20000] [--size 256] [--iterations 400] [--png DIR]
 """
 
 import argparse
@@ -17,7 +17,7 @@ import numpy as np
 from PIL import Image
 
 from stipple.evaluate import fitted_similarity, line_ink
-from stipple.line import draw_line
+from stipple.line import LINE_ITERATIONS, draw_line
 from stipple.torus import halftone_torus
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,7 +92,7 @@ def main():
     parser.add_argument("images", nargs="*", type=Path, default=DEFAULT_IMAGES)
     parser.add_argument("-M", type=int, default=20000)
     parser.add_argument("--size", type=int, default=256)
-    parser.add_argument("--iterations", type=int, default=300)
+    parser.add_argument("--iterations", type=int, default=LINE_ITERATIONS)
     parser.add_argument("--png", default=None, help="directory for the drawn lines (1 px, image resolution)")
     args = parser.parse_args()
     for path in args.images:

@@ -601,7 +601,7 @@ def torus(ctx, image, **options):
 @main.command()
 @click.argument("image", required=False)
 @common_options(iterations=LINE_ITERATIONS)
-@click.option("--length", type=float, default=None, help="Curve length in pixels (default: sqrt(M W H)).")
+@click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.75 sqrt(M W H)).")
 @click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
 @click.pass_context
 def line(ctx, image, **options):
