@@ -455,20 +455,7 @@ def solve(problem, options, init, stop=None):
 
     result, stopped_by = supervised(
         options,
-        lambda callback, seconds, iterations: run(
-            problem,
-            init=init,
-            seed=options["seed"],
-            tol=options["tol"],
-            iterations=options["iterations"],
-            time_limit=options["time_limit"],
-            safeguard=options["safeguard"],
-            callback=callback,
-            checkpoint=options["checkpoint"],
-            checkpoint_seconds=seconds,
-            checkpoint_iterations=iterations,
-            resume=options["resume"],
-        ),
+        lambda keywords: run(problem, init=init, safeguard=options["safeguard"], **keywords),
         stop,
         announce if verbose else None,
     )
@@ -483,10 +470,10 @@ def solve(problem, options, init, stop=None):
 
 
 def supervised(options, launch, stop=None, announce=None):
-    """``launch(callback, checkpoint_seconds, checkpoint_iterations)`` under the CLI's progress bar and signal
-    handling; the callback also ends the run when ``stop`` returns True, and ``announce()`` reports the settings
-    between the checks of the checkpoint interval and of the seed. Returns the result and the signal that stopped
-    it (or None)."""
+    """``launch(keywords)`` under the CLI's progress bar and signal handling, where ``keywords`` are the stopping,
+    seed, callback and checkpoint arguments that ``halftone.run`` and ``draw_line`` share. The callback also ends
+    the run when ``stop`` returns True, and ``announce()`` reports the settings between the checks of the
+    checkpoint interval and of the seed. Returns the result and the signal that stopped it (or None)."""
     seconds, iterations = parse_every(options["checkpoint_every"])
     if announce is not None:
         announce()
@@ -495,9 +482,19 @@ def supervised(options, launch, stop=None, announce=None):
     with SIGNALS.deferred() as interruption:
         try:
             result = launch(
-                lambda state: any([progress(state), interruption.stop_requested(state), bool(stop and stop(state))]),
-                seconds,
-                iterations,
+                {
+                    "seed": options["seed"],
+                    "tol": options["tol"],
+                    "iterations": options["iterations"],
+                    "time_limit": options["time_limit"],
+                    "callback": lambda state: any(
+                        [progress(state), interruption.stop_requested(state), bool(stop and stop(state))]
+                    ),
+                    "checkpoint": options["checkpoint"],
+                    "checkpoint_seconds": seconds,
+                    "checkpoint_iterations": iterations,
+                    "resume": options["resume"],
+                }
             )
         finally:
             progress.close()
@@ -643,23 +640,15 @@ def solve_line(weights, options, init):
 
     result, stopped_by = supervised(
         options,
-        lambda callback, seconds, iterations: draw_line(
+        lambda keywords: draw_line(
             weights,
             options["n_points"],
             options["length"],
             options["bandwidth"],
-            seed=options["seed"],
             init=init,
-            tol=options["tol"],
-            iterations=options["iterations"],
-            time_limit=options["time_limit"],
-            callback=callback,
-            checkpoint=options["checkpoint"],
-            checkpoint_seconds=seconds,
-            checkpoint_iterations=iterations,
-            resume=options["resume"],
             threads=options["threads"],
             epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+            **keywords,
         ),
     )
     if options["verbose"] and not options["quiet"]:
