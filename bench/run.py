@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stipple.allocator import reuse_freed_memory
 from stipple.halftone import default_threads, run
 from stipple.inputs import load_density
 from stipple.sphere import CellMap, from_lon_lat, sphere_problem
@@ -158,6 +159,7 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, default=default_threads())
     parser.add_argument("--quick", action="store_true", help="small cases only (smoke test)")
     args = parser.parse_args(argv)
+    reuse_freed_memory()  # as the command line does
     portrait = load_density("samples/astronaut256.png")
     topography = CellMap(load_density("samples/topo.npy"))
     results = []

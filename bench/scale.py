@@ -15,6 +15,7 @@ import time
 import numpy as np
 from PIL import Image
 
+from stipple.allocator import reuse_freed_memory
 from stipple.design import spherical_design
 from stipple.halftone import default_threads, run
 from stipple.torus import torus_problem
@@ -83,6 +84,7 @@ def design_case(strength, n_points):
 
 
 def main(argv):
+    reuse_freed_memory()  # as the command line does
     kind, *values = argv
     if kind == "torus":
         report = torus_case(*map(int, values))

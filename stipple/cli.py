@@ -17,6 +17,7 @@ import click
 import numpy as np
 
 from . import __version__
+from .allocator import reuse_freed_memory
 from .config import load_config
 from .errors import StippleError
 from .halftone import INITS, MAX_POINTS, check_integer
@@ -122,6 +123,7 @@ class StippleGroup(click.Group):
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        reuse_freed_memory()
         try:
             with SIGNALS:
                 code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
