@@ -10,12 +10,20 @@ shrink until the process ends. The command line calls it once at start-up; the l
 
 import ctypes
 import ctypes.util
-import platform
+import os
 
 # mallopt parameters (glibc's malloc.h).
 M_TRIM_THRESHOLD = -1
 M_MMAP_MAX = -4
 M_ARENA_MAX = -8
+
+
+def running_glibc():
+    """Whether this process runs on glibc (asked of the loaded C library, not read from the executable)."""
+    try:
+        return (os.confstr("CS_GNU_LIBC_VERSION") or "").startswith("glibc")
+    except (ValueError, OSError, AttributeError):
+        return False
 
 
 def reuse_freed_memory():
@@ -24,7 +32,7 @@ def reuse_freed_memory():
     One arena for all threads (worker threads would otherwise map their big blocks), no ``mmap`` for large
     blocks, and no trimming of the heap. Call it before any thread allocates.
     """
-    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+    if not running_glibc():
         return False
     try:
         libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")

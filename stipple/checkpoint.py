@@ -79,6 +79,7 @@ def load_checkpoint(path, problem):
         if _starts_like_zip(path):
             raise StippleError(f"{path}: corrupt or truncated checkpoint (a damaged .npz archive)") from None
         raise StippleError(f"{path}: not a stipple checkpoint (not a .npz archive)") from None
+    # zipfile raises NotImplementedError for an archive member in a compression method it does not know.
     except (OSError, EOFError, zipfile.LargeZipFile, NotImplementedError, RuntimeError) as error:
         raise StippleError(f"{path}: corrupt or truncated checkpoint ({error})") from None
 

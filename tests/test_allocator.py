@@ -1,10 +1,11 @@
 """The allocator setting the command line makes: freed big arrays are reused without new page faults."""
 
-import platform
 import subprocess
 import sys
 
 import pytest
+
+from stipple.allocator import running_glibc
 
 PROBE = """
 import resource, sys
@@ -18,9 +19,7 @@ np.ones(size)
 print(applied, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
 """
 
-glibc_only = pytest.mark.skipif(
-    platform.system() != "Linux" or platform.libc_ver()[0] != "glibc", reason="glibc's mallopt only"
-)
+glibc_only = pytest.mark.skipif(not running_glibc(), reason="glibc's mallopt only")
 
 
 def page_faults_of_second_array(mode):
