@@ -20,9 +20,10 @@ from . import __version__
 from .allocator import reuse_freed_memory
 from .config import load_config
 from .errors import StippleError
-from .halftone import INITS, MAX_POINTS, check_integer
+from .halftone import DEFAULT_SETTLE, INITS, MAX_POINTS, check_integer
 from .inputs import load_density
 from .line import LINE_ITERATIONS
+from .optimize import BETAS, SETTLE_WINDOW
 from .outputs import PROJECTIONS, check_png_outputs, check_writable, output_format, parse_length, sphere_canvas
 from .plotter import DOT_STYLES
 from .transforms import BACKENDS
@@ -203,6 +204,14 @@ def run_options(iterations=2000):
             help="Transform threads (default: all CPUs; the same thread count gives the same points).",
         ),
         click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+        click.option(
+            "--beta",
+            type=click.Choice(BETAS),
+            default="hestenes-stiefel",
+            show_default=True,
+            help="CG direction rule: Hestenes-Stiefel (one Jacobian transform per iteration) or the paper's "
+            "Daniel (two).",
+        ),
     ]
 
 
@@ -253,11 +262,12 @@ def apply_options(function, options):
     return function
 
 
-def common_options(function=None, *, iterations=2000):
+def common_options(function=None, *, iterations=2000, settle=True):
     """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
-    the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap."""
+    the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap;
+    ``settle=False`` leaves out ``--settle`` (for commands whose runs stop otherwise)."""
     if function is None:
-        return lambda function: common_options(function, iterations=iterations)
+        return lambda function: common_options(function, iterations=iterations, settle=settle)
     problem = [
         click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
         click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
@@ -290,6 +300,16 @@ def common_options(function=None, *, iterations=2000):
             help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
         ),
     ]
+    if settle:
+        problem.append(
+            click.option(
+                "--settle",
+                type=click.FloatRange(min=0),
+                default=None,
+                help=f"Also stop when the last {SETTLE_WINDOW} iterations lowered the energy by less than this "
+                f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus, else never; README, Defaults).",
+            )
+        )
     runs = run_options(iterations)
     return apply_options(function, [config_option()] + problem + runs + output_options() + session_options())
 
@@ -457,7 +477,14 @@ def solve(problem, options, init, stop=None):
 
     result, stopped_by = supervised(
         options,
-        lambda keywords: run(problem, init=init, safeguard=options["safeguard"], **keywords),
+        lambda keywords: run(
+            problem,
+            init=init,
+            safeguard=options["safeguard"],
+            correct=options.get("correct", False),
+            settle=options.get("settle"),
+            **keywords,
+        ),
         stop,
         announce if verbose else None,
     )
@@ -496,6 +523,7 @@ def supervised(options, launch, stop=None, announce=None):
                     "checkpoint_seconds": seconds,
                     "checkpoint_iterations": iterations,
                     "resume": options["resume"],
+                    "beta": options["beta"],
                 }
             )
         finally:
@@ -540,7 +568,14 @@ def main():
     type=click.Choice(["gauss-newton", "full"]),
     default="gauss-newton",
     show_default=True,
-    help="Hessian of the Newton step and Daniel's beta.",
+    help="Hessian of the Newton step (and of --beta daniel).",
+)
+@click.option(
+    "--correct/--no-correct",
+    default=True,
+    show_default=True,
+    help="Finish with the low-frequency correction (a few iterations of the plain E_N at N/6 and N/12; README, "
+    "Defaults).",
 )
 @palette_options(None)
 @click.pass_context
@@ -599,7 +634,7 @@ def torus(ctx, image, **options):
 
 @main.command()
 @click.argument("image", required=False)
-@common_options(iterations=LINE_ITERATIONS)
+@common_options(iterations=LINE_ITERATIONS, settle=False)
 @click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.75 sqrt(M W H)).")
 @click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
 @click.pass_context

@@ -2,16 +2,23 @@
 
 import json
 import os
-from dataclasses import dataclass, fields
+import time
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
 from .errors import StippleError
-from .optimize import OptimizeResult, initial_state, minimize
+from .optimize import BETAS, OptimizeResult, initial_state, minimize
 
 MAX_POINTS = 20_000_000
 MAX_BANDWIDTH = 8192
 INITS = ("stratified", "density", "uniform")
+# The final low-frequency correction: for each (factor, iterations) in turn, that many CG iterations on the plain
+# E_N at bandwidth N / factor; under a time limit at most COARSE_TIME_SHARE of it in all (README, Defaults).
+COARSE_LEVELS = ((6, 5), (12, 20))
+COARSE_TIME_SHARE = 0.04
+# Default ``settle``: stop when 20 iterations gain less than this fraction of the energy (README, Defaults).
+DEFAULT_SETTLE = 1.5e-3
 
 
 @dataclass
@@ -21,7 +28,9 @@ class Problem:
     ``objective`` is what CG minimises; ``discrepancy`` its transform part (the whole objective without a near
     field), which evaluation uses for ``E_N``. ``sample(rng, count)`` draws i.i.d. points from the density and
     ``stratified(rng, count)``, where the domain has one, points stratified over it; ``settings`` are the values
-    that define the problem (compared when a checkpoint is resumed).
+    that define the problem (compared when a checkpoint is resumed). ``coarse(bandwidth)``, where the domain has
+    one, is the same density's plain ``E_N`` problem at a lower bandwidth, for the final low-frequency correction;
+    ``settle`` the default of ``run``'s ``settle`` for it (0: never).
     """
 
     domain: str
@@ -33,13 +42,21 @@ class Problem:
     sample: object
     settings: dict
     stratified: object = None
+    coarse: object = None
+    settle: float = 0.0
 
 
 @dataclass
 class HalftoneResult(OptimizeResult):
-    """An ``OptimizeResult`` (points, status, message, history, final state) and the bandwidth used."""
+    """An ``OptimizeResult`` (points, status, message, history, final state) and the bandwidth used.
+
+    After a low-frequency correction, ``points``, ``energy`` and ``relative_gradient_norm`` are those of the
+    corrected points, while the history and ``state`` are the main run's (a resumed run continues from there);
+    ``corrections`` are the correction's own ``OptimizeResult`` per level (their energies are the coarse ``E_N``).
+    """
 
     bandwidth: int = 0
+    corrections: tuple = ()
 
 
 def default_threads():
@@ -152,11 +169,14 @@ def run(
     time_limit=None,
     restart_every=None,
     safeguard=False,
+    beta="hestenes-stiefel",
+    settle=None,
     callback=None,
     checkpoint=None,
     checkpoint_seconds=None,
     checkpoint_iterations=None,
     resume=False,
+    correct=True,
 ):
     """Optimise ``problem`` from ``init``, or resume it from a checkpoint, and collect the result.
 
@@ -170,20 +190,31 @@ def run(
         the stratified start to that at i.i.d. density samples, so that it means the same for both.
     seed : int
         Seed of the random start.
-    tol, iterations, time_limit, restart_every, safeguard, callback :
+    tol, iterations, time_limit, restart_every, safeguard, beta, callback :
         See ``stipple.optimize.minimize``; ``iterations`` counts from the very start of a resumed run.
+    settle : float, optional
+        Also stop when the last ``SETTLE_WINDOW`` iterations lowered the energy by less than this fraction of it
+        (``stipple.optimize.minimize``); default ``problem.settle`` (the torus: ``DEFAULT_SETTLE``); 0: never.
     checkpoint : path, optional
         Save the complete state there (atomically) every ``checkpoint_seconds`` or
         ``checkpoint_iterations``, and when the run ends. An existing file is never overwritten unless
         the run resumes from it.
     resume : bool
         Continue from ``checkpoint`` (refused if it belongs to another problem).
+    correct : bool
+        Finish with the low-frequency correction (``correct_low_frequencies``) where the problem has a ``coarse``
+        version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main run leaves ``COARSE_TIME_SHARE`` of it to the correction.
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
+    settle = problem.settle if settle is None else settle
+    if not isinstance(settle, (int, float)) or not 0 <= settle < 1:
+        raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
     check_integer("iterations", iterations, 0, 10**9)
+    if beta not in BETAS:
+        raise StippleError(f"beta must be one of {', '.join(BETAS)}, not {beta!r}")
     saver = None
     if checkpoint is not None:
         if not resume and os.path.exists(checkpoint):
@@ -202,22 +233,79 @@ def run(
         state = initial_state(problem.objective, problem.manifold, start)
         state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
         state.rng_state = json.dumps(rng.bit_generator.state)
+    corrects = correct and problem.coarse is not None and problem.bandwidth >= 4 * max(COARSE_LEVELS)[0]
+    started = time.perf_counter()
     outcome = minimize(
         problem.objective,
         problem.manifold,
         state=state,
         tol=tol,
         max_iterations=iterations,
-        time_limit=time_limit,
+        time_limit=time_limit if time_limit is None or not corrects else time_limit * (1 - COARSE_TIME_SHARE),
         restart_every=restart_every,
         safeguard=safeguard,
+        beta=beta,
+        settle=settle,
         callback=_chain(saver, callback),
     )
     if saver is not None:
         saver.save(outcome.state)
-    return HalftoneResult(
+    result = HalftoneResult(
         **{item.name: getattr(outcome, item.name) for item in fields(outcome)}, bandwidth=problem.bandwidth
     )
+    if corrects and result.iterations > 0 and result.status != "stopped":
+        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        result = correct_low_frequencies(problem, result, remaining, callback)
+    return result
+
+
+def correct_low_frequencies(problem, result, time_limit=None, callback=None, levels=COARSE_LEVELS):
+    """Move ``result.points`` by CG on the plain ``E_N`` of ``problem.coarse`` at ``N / factor``, for each
+    ``(factor, iterations)`` of ``levels`` in turn.
+
+    A coarse problem's gradient is a smooth field, so its steps are smooth deformations of the point set that fix
+    the frequencies below ``N / (2 factor)``, which every iteration of the main run stirs up again, and leave the
+    dots' local arrangement nearly as it is. They also disturb the band just above ``N / (2 factor)``, the more the
+    more iterations: the finer level goes first and briefly, the coarser one last. ``time_limit`` is for all
+    levels. ``callback`` is shown the main run's final state and may stop the correction. Returns ``result`` with
+    the corrected points, the main objective's energy and gradient norm there, and ``corrections``.
+    """
+    started = time.perf_counter()
+    points, corrections, summary = result.points, [], []
+    for factor, iterations in levels:
+        coarse = problem.coarse(even_at_least_2(problem.bandwidth / factor))
+        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        correction = minimize(
+            coarse.objective,
+            coarse.manifold,
+            points,
+            tol=1e-12,
+            max_iterations=iterations,
+            time_limit=remaining,
+            callback=None if callback is None else lambda _: callback(result.state),
+        )
+        points = correction.points
+        corrections.append(correction)
+        summary.append(f"{correction.iterations} at N={coarse.bandwidth}")
+        if correction.status == "stopped":
+            break
+    if sum(level.iterations for level in corrections) == 0:
+        return replace(result, corrections=tuple(corrections))
+    norm = gradient_norm(problem, points)
+    initial = result.state.initial_gradient_norm
+    return replace(
+        result,
+        points=points,
+        energy=problem.objective.energy(),
+        relative_gradient_norm=norm / initial if initial > 0 else 0.0,
+        message=f"{result.message}; low-frequency correction: {', '.join(summary)} iterations",
+        corrections=tuple(corrections),
+    )
+
+
+def even_at_least_2(value):
+    """``value`` rounded to an even integer, at least 2."""
+    return max(2, 2 * int(round(value / 2)))
 
 
 def gradient_norm(problem, points):

@@ -382,6 +382,7 @@ def draw_line(
     checkpoint_seconds=None,
     checkpoint_iterations=None,
     resume=False,
+    beta="hestenes-stiefel",
     threads=None,
     epsilon=1e-9,
     backend="ducc0",
@@ -402,7 +403,7 @@ def draw_line(
     bandwidth : int, optional
     init : array_like, optional
         Starting vertices in unit coordinates (default: ``initial_loop``).
-    tol, iterations, time_limit, callback, checkpoint, checkpoint_seconds, checkpoint_iterations, resume :
+    tol, iterations, time_limit, callback, checkpoint, checkpoint_seconds, checkpoint_iterations, resume, beta :
         As for ``stipple.halftone.run``; ``time_limit`` counts over all phases.
 
     Returns
@@ -447,6 +448,7 @@ def draw_line(
         checkpoint_seconds=checkpoint_seconds,
         checkpoint_iterations=checkpoint_iterations,
         resume=resume,
+        beta=beta,
     )
     for _ in range(MAX_PHASES):
         if constraints_hold(problem, result.points, constraint_tol) or result.status == "stopped":
@@ -466,6 +468,7 @@ def draw_line(
             iterations=phase_iterations,
             time_limit=remaining,
             callback=_chain(saver, callback),
+            beta=beta,
         )
         if saver is not None:
             saver.save(result.state)

@@ -1,8 +1,13 @@
-"""Nonlinear conjugate gradients with Daniel's beta and a Newton step (Gräf, Potts, Steidl §4.2).
+"""Nonlinear conjugate gradients with a Newton step (Gräf, Potts, Steidl §4.2).
 
 Euclidean on the torus and Riemannian on the sphere: the manifold supplies inner products,
 retraction (exponential map) and transport; the objective supplies energy, differential and
 Hessian-vector products at its current points.
+
+Two rules for ``beta``: the paper's, Daniel's ``<h', H' d~> / <d~, H' d~>``, needs the Hessian's form on two
+fields at the new points (two Jacobian fields, one transform each on the torus); Hestenes-Stiefel's
+``<h', y> / <d~, y>`` with ``y = h' - h~`` takes the Hessian's action along ``d~`` from the change of the
+gradient (equal to Daniel's on a quadratic) and needs the form on the new direction only.
 """
 
 import time
@@ -11,14 +16,19 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 # "stalled" is set by callers whose goal is more than a small gradient (spherical designs).
-STATUSES = ("converged", "max_iterations", "time_limit", "stopped", "no_descent", "stalled")
+STATUSES = ("converged", "settled", "max_iterations", "time_limit", "stopped", "no_descent", "stalled")
+# ``settle`` compares the energy with the one this many iterations before.
+SETTLE_WINDOW = 20
+BETAS = ("hestenes-stiefel", "daniel")
 
 
 @dataclass
 class CGState:
     """Everything the iteration needs to continue; saved by checkpoints as it is.
 
-    ``gradient_curvature`` and ``direction_curvature`` are ``<h, H h>`` and ``<d, H d>`` at ``points``.
+    ``gradient_curvature`` and ``direction_curvature`` are ``<h, H h>`` and ``<d, H d>`` at ``points``
+    (``gradient_curvature`` is 0 where the beta rule did not need it; it is read only when ``<d, H d>`` is not
+    positive, which Hestenes-Stiefel's steps never leave).
     """
 
     points: np.ndarray
@@ -60,7 +70,7 @@ class OptimizeResult:
 
     @property
     def success(self):
-        return self.status in ("converged", "max_iterations", "time_limit")
+        return self.status in ("converged", "settled", "max_iterations", "time_limit")
 
 
 def initial_state(objective, manifold, points):
@@ -82,12 +92,13 @@ def initial_state(objective, manifold, points):
     )
 
 
-def cg_step(objective, manifold, state, restart_every, safeguard=False):
+def cg_step(objective, manifold, state, restart_every, safeguard=False, beta="hestenes-stiefel"):
     """One CG iteration; returns the next state, or ``None`` if no descent step exists.
 
-    Newton step ``alpha = -<d, h> / <d, H d>``, Daniel's ``beta = <h', H' d~> / <d~, H' d~>`` with the
-    transported direction ``d~``; restart with ``-h'`` when ``d'`` is not a descent direction. With
-    ``safeguard`` a step that raises the energy is halved (up to 30 times) before it is taken.
+    Newton step ``alpha = -<d, h> / <d, H d>``, then the next direction ``d' = -h' + beta d~`` by the rule
+    ``beta`` (one of ``BETAS``, see the module's docstring) with the transported direction ``d~``; restart with
+    ``-h'`` when ``d'`` is not a descent direction. With ``safeguard`` a step that raises the energy is halved
+    (up to 30 times) before it is taken.
     """
     points, gradient = state.points, state.gradient
     direction, curvature = state.direction, state.direction_curvature
@@ -106,25 +117,56 @@ def cg_step(objective, manifold, state, restart_every, safeguard=False):
         return None
     new_gradient = manifold.riesz(new_points, objective.gradient())
     moved = manifold.transport(points, step, direction)
-    gram = objective.hessian_gram([new_gradient, moved])
-    beta = gram[0, 1] / gram[1, 1] if gram[1, 1] > 0 else 0.0
-    new_direction = -new_gradient + beta * moved
-    new_curvature = gram[0, 0] - 2 * beta * gram[0, 1] + beta**2 * gram[1, 1]
     iteration = state.iteration + 1
-    restart = restart_every and iteration % restart_every == 0
-    if restart or not manifold.inner(new_points, new_direction, new_gradient) < 0:
-        new_direction, new_curvature = -new_gradient, gram[0, 0]
+    restart = bool(restart_every) and iteration % restart_every == 0
+    if beta == "daniel":
+        new_direction, curvatures = _daniel(objective, manifold, new_points, new_gradient, moved, restart)
+    else:
+        moved_gradient = manifold.transport(points, step, gradient)
+        new_direction, curvatures = _hestenes_stiefel(
+            objective, manifold, new_points, new_gradient, moved, moved_gradient, restart
+        )
     return replace(
         state,
         points=new_points,
         gradient=new_gradient,
         direction=new_direction,
-        gradient_curvature=float(gram[0, 0]),
-        direction_curvature=float(new_curvature),
+        gradient_curvature=curvatures[0],
+        direction_curvature=curvatures[1],
         iteration=iteration,
         energies=state.energies + [objective.energy()],
         gradient_norms=state.gradient_norms + [manifold.norm(new_points, new_gradient)],
     )
+
+
+def _daniel(objective, manifold, points, gradient, moved, restart):
+    """Daniel's direction and ``(<h, H h>, <d, H d>)`` from the Hessian's form on ``gradient`` and ``moved``."""
+    gram = objective.hessian_gram([gradient, moved])
+    beta = gram[0, 1] / gram[1, 1] if gram[1, 1] > 0 else 0.0
+    direction = -gradient + beta * moved
+    curvature = gram[0, 0] - 2 * beta * gram[0, 1] + beta**2 * gram[1, 1]
+    if restart or not manifold.inner(points, direction, gradient) < 0:
+        direction, curvature = -gradient, gram[0, 0]
+    return direction, (float(gram[0, 0]), float(curvature))
+
+
+def _hestenes_stiefel(objective, manifold, points, gradient, moved, moved_gradient, restart):
+    """Hestenes-Stiefel's direction (``beta >= 0``) and ``(0, <d, H d>)``: the form on the new direction only.
+
+    Steepest descent, with ``(<h, H h>, <h, H h>)``, on a restart, for ``beta = 0``, and where the direction is
+    not a descent direction or has no positive curvature (possible with the full Hessian).
+    """
+    change = gradient - moved_gradient
+    denominator = manifold.inner(points, moved, change)
+    beta = max(manifold.inner(points, gradient, change) / denominator, 0.0) if denominator > 0 else 0.0
+    if beta > 0 and not restart:
+        direction = -gradient + beta * moved
+        if manifold.inner(points, direction, gradient) < 0:
+            curvature = float(objective.hessian_gram([direction])[0, 0])
+            if curvature > 0:
+                return direction, (0.0, curvature)
+    steepest = float(objective.hessian_gram([gradient])[0, 0])
+    return -gradient, (steepest, steepest)
 
 
 def minimize(
@@ -138,6 +180,8 @@ def minimize(
     time_limit=None,
     restart_every=None,
     safeguard=False,
+    beta="hestenes-stiefel",
+    settle=None,
     callback=None,
 ):
     """Minimise ``objective`` over point sets on ``manifold`` by nonlinear CG.
@@ -161,6 +205,11 @@ def minimize(
         automatic restarts when the direction is not a descent direction).
     safeguard : bool
         Halve steps that would raise the energy (default off: the paper's method takes every Newton step).
+    beta : {"hestenes-stiefel", "daniel"}
+        The rule for the next direction (see the module's docstring); "daniel" is the paper's.
+    settle : float, optional
+        Stop ("settled") when the last ``SETTLE_WINDOW`` iterations lowered the energy by less than this fraction
+        of it (default: never).
     callback : callable, optional
         ``callback(state)`` after the start and every iteration; returning True stops the run.
 
@@ -175,10 +224,10 @@ def minimize(
     if callback is not None and callback(state):
         status = "stopped"
     while status is None:
-        status = _stop_reason(state, tol, max_iterations, time_limit, time.perf_counter() - started)
+        status = _stop_reason(state, tol, settle, max_iterations, time_limit, time.perf_counter() - started)
         if status is not None:
             break
-        following = cg_step(objective, manifold, state, restart_every, safeguard)
+        following = cg_step(objective, manifold, state, restart_every, safeguard, beta)
         if following is None:
             status = "no_descent"
             break
@@ -188,9 +237,13 @@ def minimize(
     return _result(state, status, time.perf_counter() - started)
 
 
-def _stop_reason(state, tol, max_iterations, time_limit, elapsed):
+def _stop_reason(state, tol, settle, max_iterations, time_limit, elapsed):
     if state.relative_gradient_norm <= tol:
         return "converged"
+    if settle and len(state.energies) > SETTLE_WINDOW:
+        earlier, now = state.energies[-1 - SETTLE_WINDOW], state.energies[-1]
+        if earlier - now < settle * abs(now):
+            return "settled"
     if state.iteration >= max_iterations:
         return "max_iterations"
     if time_limit is not None and elapsed >= time_limit:
@@ -200,6 +253,8 @@ def _stop_reason(state, tol, max_iterations, time_limit, elapsed):
 
 _MESSAGES = {
     "converged": "relative gradient norm {rel:.3g} <= tol after {it} iterations",
+    "settled": f"energy settled after {{it}} iterations (less than the settle fraction gained over the last "
+    f"{SETTLE_WINDOW}; relative gradient norm {{rel:.3g}})",
     "max_iterations": "reached {it} iterations (relative gradient norm {rel:.3g})",
     "time_limit": "time limit reached after {it} iterations (relative gradient norm {rel:.3g})",
     "stopped": "stopped on request after {it} iterations (relative gradient norm {rel:.3g})",

@@ -6,6 +6,7 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import (
+    DEFAULT_SETTLE,
     MAX_BANDWIDTH,
     Problem,
     check_bandwidth,
@@ -24,7 +25,7 @@ from .manifolds import Torus
 from .nearfield import NearField, TorusPairs
 from .objective import Discrepancy, SumObjective
 from .sampling import sample_image, stratified_sample
-from .transforms import BACKENDS, TorusFourier, make_nufft, torus_modes
+from .transforms import BACKENDS, TorusFourier, make_nufft
 
 DEFAULT_EPSILON = 1e-9
 # The paper's Fig. 5.1 (M = 30150, N = 650 on a square): N = 4.02 / (hexagonal spacing of M dots).
@@ -82,25 +83,31 @@ def cell_factor(k, cells):
 def image_coefficients(weights, bandwidths):
     """Exact ``w_n = int_{[0,1)^2} w(u) e^{-2 pi i n.u} du`` of the pixel-constant image, ``|n_j| <= N_j/2``.
 
-    Returns an array of shape ``(N1+1, N2+1)``, first axis ``n1`` (x, columns), second ``n2`` (y, rows).
+    Returns an array of shape ``(N1+1, N2+1)``, first axis ``n1`` (x, columns), second ``n2`` (y, rows). The
+    cell factors are separable: computed per axis (at M = 10^6 the 2-D grid has 14 million modes).
     """
     rows, columns = weights.shape
     spectrum = np.fft.fft2(weights)
-    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
-    n1, n2 = n1.astype(int), n2.astype(int)
-    dft = spectrum[n2 % rows, n1 % columns]
-    return dft * cell_factor(n1, columns) * cell_factor(n2, rows) / (rows * columns)
+    n1, n2 = (np.arange(-(bandwidth // 2), bandwidth // 2 + 1) for bandwidth in bandwidths)
+    dft = spectrum[np.ix_(n2 % rows, n1 % columns)].T
+    factors = np.outer(cell_factor(n1, columns), cell_factor(n2, rows)) / (rows * columns)
+    return np.ascontiguousarray(dft * factors)
 
 
-def torus_frequencies(bandwidths, scale):
-    """``|xi|`` with ``xi = (n1 / scale_x, n2 / scale_y)`` on the mode grid: physical frequencies."""
-    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
-    return np.hypot(n1 / scale[0], n2 / scale[1])
+def radial_on_modes(radial, bandwidths, scale):
+    """``radial(|xi|)``, ``xi = (n1 / scale_x, n2 / scale_y)``, on the mode grid: the physical frequencies.
+
+    Evaluated on the quadrant ``n1, n2 >= 0`` only (a quarter of the modes) and mirrored: ``|xi|`` is even in both.
+    """
+    n1, n2 = (np.arange(bandwidth // 2 + 1) for bandwidth in bandwidths)
+    quadrant = radial(np.hypot.outer(n1 / scale[0], n2 / scale[1]))
+    mirror = [np.abs(np.arange(-(bandwidth // 2), bandwidth // 2 + 1)) for bandwidth in bandwidths]
+    return quadrant[np.ix_(*mirror)]
 
 
 def torus_kernel(bandwidths, scale):
     """``kB(|xi|)`` on the mode grid; ``k_0 = 0``."""
-    kernel = ball_kernel(torus_frequencies(bandwidths, scale))
+    kernel = radial_on_modes(ball_kernel, bandwidths, scale)
     kernel[bandwidths[0] // 2, bandwidths[1] // 2] = 0.0
     return kernel
 
@@ -145,7 +152,7 @@ def torus_problem(
     kernel = torus_kernel(bandwidths, scale)
     if near_field:
         near = torus_near_kernel(bandwidth, scale)
-        cross_kernel = near.plane_coefficients(torus_frequencies(bandwidths, scale))
+        cross_kernel = radial_on_modes(near.plane_coefficients, bandwidths, scale)
         discrepancy = Discrepancy(fourier, kernel - cross_kernel, target, weight, hessian, cross_kernel)
         pairs = NearField(near, weight, TorusPairs(scale), factor=np.prod(scale), hessian=hessian)
         objective = SumObjective(discrepancy, pairs)
@@ -160,6 +167,10 @@ def torus_problem(
         bandwidth=bandwidth,
         sample=lambda rng, count: sample_image(weights, rng, count),
         stratified=lambda rng, count: stratified_sample(weights, rng, count),
+        settle=DEFAULT_SETTLE,
+        coarse=lambda coarse_bandwidth: torus_problem(
+            weights, n_points, coarse_bandwidth, backend=backend, threads=threads, epsilon=epsilon, near_field=False
+        ),
         settings={
             "domain": "torus",
             "points": n_points,

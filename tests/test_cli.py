@@ -73,6 +73,7 @@ def test_init_from_csv_continues_from_those_points(image_path, tmp_path):
         (["--width", "wide"], "width must be a number with a unit"),
         (["--gamma", 0], "gamma must be a positive number"),
         (["--tol", -1], "tol must be a positive number"),
+        (["--settle", 1], "settle must be a number in [0, 1)"),
     ],
 )
 def test_bad_options_give_one_line_errors(image_path, extra, message):
@@ -85,8 +86,28 @@ def test_bad_options_give_one_line_errors(image_path, extra, message):
 def test_usage_errors_exit_two(image_path):
     result = run(["torus", image_path, "--backend", "nope"])
     assert result.exit_code == 2
+    result = run(["torus", image_path, "--beta", "fletcher-reeves"])
+    assert result.exit_code == 2
+    result = run(["torus", image_path, "--settle", -0.1])
+    assert result.exit_code == 2
     result = run(["torus", image_path, "--iterations", -1])
     assert result.exit_code == 2
+
+
+def test_run_options_reach_the_run(image_path):
+    """--beta daniel with --settle 0 and --no-correct is 0.1's method: the same points as the library's run."""
+    from stipple.halftone import run as library_run
+    from stipple.inputs import load_density
+    from stipple.torus import torus_problem
+
+    args = ["torus", image_path, "-M", 150, "-N", 24, "--iterations", 30, "--threads", 1, "-q"]
+    paper = run(args + ["--beta", "daniel", "--settle", 0, "--no-correct"])
+    default = run(args)
+    assert paper.exit_code == 0 and default.exit_code == 0
+    problem = torus_problem(load_density(image_path), 150, 24, threads=1)
+    expected = library_run(problem, iterations=30, beta="daniel", settle=0, correct=False).points * [24, 16]
+    np.testing.assert_allclose(np.loadtxt(paper.output.splitlines(), delimiter=",", skiprows=1), expected, atol=1e-5)
+    assert paper.output != default.output
 
 
 def test_missing_and_blank_inputs(tmp_path):

@@ -1,9 +1,10 @@
 """The CG driver on a small objective with known behaviour (independent of the transforms)."""
 
 import numpy as np
+import pytest
 
 from stipple.manifolds import Sphere, Torus
-from stipple.optimize import minimize
+from stipple.optimize import BETAS, minimize
 
 
 class Bowl:
@@ -41,8 +42,10 @@ def test_cg_converges_on_a_bowl():
 def test_safeguard_stops_energy_rises():
     centre = np.full((5, 2), 0.5)
     start = centre + np.linspace(-0.2, 0.2, 10).reshape(5, 2)
-    plain = minimize(Bowl(centre, trust=0.3), Torus(), start, tol=1e-12, max_iterations=60)
-    guarded = minimize(Bowl(centre, trust=0.3), Torus(), start, tol=1e-12, max_iterations=60, safeguard=True)
+    # Daniel's rule: with it this start overshoots (Hestenes-Stiefel's happens not to).
+    options = {"tol": 1e-12, "max_iterations": 60, "beta": "daniel"}
+    plain = minimize(Bowl(centre, trust=0.3), Torus(), start, **options)
+    guarded = minimize(Bowl(centre, trust=0.3), Torus(), start, safeguard=True, **options)
     assert np.any(np.diff(plain.energies) > 0)
     assert np.all(np.diff(guarded.energies) <= 1e-12 * guarded.energies[:-1])
     assert guarded.energies[-1] < 1e-3 * guarded.energies[0]
@@ -90,3 +93,57 @@ def test_zero_gradient_start_is_converged():
     centre = np.full((3, 2), 0.5)
     result = minimize(Bowl(centre), Torus(), centre.copy(), tol=1e-3)
     assert result.status == "converged" and result.iterations == 0
+
+
+class Quadratic:
+    """``E = (p - c)^T A (p - c) / 2`` over the flattened points, ``A`` symmetric positive definite."""
+
+    def __init__(self, centre, matrix):
+        self.centre, self.matrix = centre, matrix
+
+    def set_points(self, points):
+        self.offset = (points - self.centre).ravel()
+
+    def energy(self):
+        return 0.5 * float(self.offset @ self.matrix @ self.offset)
+
+    def gradient(self):
+        return (self.matrix @ self.offset).reshape(self.centre.shape)
+
+    def hessian_gram(self, vectors):
+        flat = [v.ravel() for v in vectors]
+        return np.array([[u @ self.matrix @ v for v in flat] for u in flat])
+
+
+@pytest.mark.parametrize("beta", BETAS)
+def test_cg_ends_on_a_quadratic_in_as_many_steps_as_dimensions(beta):
+    """Exact line search on a quadratic: CG is exact after n = 8 steps, and both beta rules take the same ones."""
+    rng = np.random.default_rng(5)
+    factor = rng.standard_normal((8, 8))
+    matrix = factor @ factor.T + 0.5 * np.eye(8)
+    centre = np.full((4, 2), 0.5)
+    start = centre + 0.05 * rng.standard_normal((4, 2))
+    paths = {}
+    for rule in BETAS:
+        paths[rule] = []
+        minimize(
+            Quadratic(centre, matrix),
+            Torus(),
+            start,
+            tol=1e-300,
+            max_iterations=8,
+            beta=rule,
+            callback=lambda state, path=paths[rule]: path.append(state.points.copy()),
+        )
+    np.testing.assert_allclose(paths[beta][-1], centre, atol=1e-11)
+    for mine, theirs in zip(paths[beta], paths["daniel"], strict=True):
+        np.testing.assert_allclose(mine, theirs, atol=1e-11)
+
+
+@pytest.mark.parametrize("beta", BETAS)
+def test_both_beta_rules_descend_on_a_bowl(beta):
+    centre = np.full((5, 2), 0.5)
+    start = centre + np.linspace(-0.2, 0.2, 10).reshape(5, 2)
+    result = minimize(Bowl(centre), Torus(), start, tol=1e-6, max_iterations=500, beta=beta)
+    assert result.status == "converged"
+    assert np.all(np.diff(result.energies) <= 0)

@@ -2,13 +2,17 @@ import numpy as np
 import pytest
 from scipy.special import roots_legendre
 
+from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
+from stipple.optimize import SETTLE_WINDOW
 from stipple.torus import (
     axis_bandwidths,
     halftone_torus,
     image_coefficients,
     sample_image,
     stratified_sample,
+    torus_kernel,
     torus_problem,
+    torus_scale,
 )
 from stipple.transforms import torus_modes
 
@@ -89,6 +93,19 @@ def test_backends_reach_the_same_energy():
     np.testing.assert_allclose(energies[0], energies[1], rtol=1e-6)
 
 
+@pytest.mark.parametrize("beta,fields_per_iteration", [("hestenes-stiefel", 2), ("daniel", 3)])
+def test_type1_fields_per_iteration(beta, fields_per_iteration):
+    """Residual plus the Jacobian of the new direction (Hestenes-Stiefel), or of the gradient and the old direction
+    (Daniel); two more at the start (residual and the gradient's Jacobian). Plain objective: no restarts here."""
+    weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
+    problem = torus_problem(weights, 200, 30, threads=1, near_field=False)
+    result = run(problem, init="density", iterations=12, tol=1e-12, beta=beta)
+    counts = problem.discrepancy.fourier.nufft.counts
+    assert result.iterations == 12
+    assert counts["type1"] == 2 + fields_per_iteration * 12
+    assert counts["type2"] == 1 + 12
+
+
 def test_full_hessian_also_descends():
     weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
     result = halftone_torus(weights, 200, 30, iterations=30, tol=1e-12, threads=1, hessian="full", init="density")
@@ -130,3 +147,47 @@ def test_stratified_start_is_the_default_and_tol_refers_to_iid_samples():
     # The reference gradient is that of i.i.d. samples, so the stratified start is already part of the way.
     assert stratified.relative_gradient_norm < 0.5
     assert iid.relative_gradient_norm == 1.0
+
+
+def direct_weighted_error(weights, points, bandwidth):
+    """``sum_n k_n |lam sum_i e^{-2 pi i n.p_i} - w_n|^2`` over ``|n_j| <= N_j / 2``, by direct O(M N^2) sums."""
+    bandwidths = axis_bandwidths(bandwidth, weights.shape)
+    n1, n2 = torus_modes((bandwidths[0] + 1, bandwidths[1] + 1))
+    phases = np.exp(-2j * np.pi * (np.outer(points[:, 0], n1.ravel()) + np.outer(points[:, 1], n2.ravel())))
+    residual = weights.mean() / len(points) * phases.sum(axis=0) - image_coefficients(weights, bandwidths).ravel()
+    kernel = torus_kernel(bandwidths, torus_scale(weights.shape)).ravel()
+    return float(np.sum(kernel * np.abs(residual) ** 2))
+
+
+def test_low_frequency_correction_fixes_the_lowest_modes_and_reports_the_energy_of_its_points():
+    weights = 1 - np.outer(np.linspace(0, 1, 48), np.linspace(1, 0.1, 72)) ** 0.5
+    problem = torus_problem(weights, 2000, threads=1)
+    plain = run(problem, iterations=60, tol=1e-12, correct=False)
+    corrected = run(problem, iterations=60, tol=1e-12)
+    lowest = problem.bandwidth // max(COARSE_LEVELS)[0]
+    assert [level.iterations for level in corrected.corrections] == [count for _, count in COARSE_LEVELS]
+    np.testing.assert_array_equal(corrected.state.points, plain.points)
+    assert direct_weighted_error(weights, corrected.points, lowest) < 0.01 * direct_weighted_error(
+        weights, plain.points, lowest
+    )
+    problem.objective.set_points(corrected.points)
+    assert corrected.energy == pytest.approx(problem.objective.energy(), rel=1e-12)
+    assert corrected.energy < 1.02 * plain.energy
+    moves = (corrected.points - plain.points + 0.5) % 1.0 - 0.5
+    distances = np.hypot(*(moves * torus_scale(weights.shape)).T)
+    assert np.percentile(distances, 90) < 0.1 * 2000**-0.5  # a smooth deformation, not a rearrangement
+
+
+def test_settle_stops_at_the_first_window_that_gains_less_than_the_fraction():
+    weights = np.outer(np.linspace(0.1, 1, 24), np.linspace(1, 0.2, 32))
+    problem = torus_problem(weights, 300, 40, threads=1)
+    result = run(problem, init="density", tol=1e-12, iterations=3000, settle=0.01, correct=False)
+    energies = result.energies
+    gains = (energies[:-SETTLE_WINDOW] - energies[SETTLE_WINDOW:]) / np.abs(energies[SETTLE_WINDOW:])
+    assert result.status == "settled"
+    assert result.iterations == SETTLE_WINDOW + np.flatnonzero(gains < 0.01)[0]
+    assert result.iterations < 3000
+    never = run(problem, init="density", tol=1e-12, iterations=result.iterations + 5, settle=0, correct=False)
+    assert never.status == "max_iterations"
+    np.testing.assert_array_equal(never.energies[: len(energies)], energies)
+    assert problem.settle == DEFAULT_SETTLE and run(problem, iterations=0).status == "max_iterations"
