@@ -41,7 +41,7 @@ def portrait(size):
 
 
 def torus_case(n_points, size, iterations):
-    """Default problem (N from M, near field, 1 thread); medians over ``iterations`` and as many after them."""
+    """Default problem (N from M, near field, threads: all CPUs); medians over ``iterations`` and as many after them."""
     started = time.perf_counter()
     problem = torus_problem(portrait(size), n_points)
     setup = time.perf_counter() - started

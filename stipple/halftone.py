@@ -203,7 +203,8 @@ def run(
         Continue from ``checkpoint`` (refused if it belongs to another problem).
     correct : bool
         Finish with the low-frequency correction (``correct_low_frequencies``) where the problem has a ``coarse``
-        version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main run leaves ``COARSE_TIME_SHARE`` of it to the correction.
+        version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main
+        run leaves ``COARSE_TIME_SHARE`` of it to the correction.
     """
     from .checkpoint import Checkpointer, load_checkpoint
 

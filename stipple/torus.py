@@ -214,14 +214,14 @@ def halftone_torus(
     epsilon : float
         Requested accuracy of the transforms.
     hessian : {"gauss-newton", "full"}
-        Hessian used by the Newton step and Daniel's beta.
+        Hessian used by the Newton step (and by ``beta="daniel"``).
     near_field : bool
         Minimise the untruncated ball discrepancy, its short range summed over neighbouring pairs (default);
         False gives the paper's bandlimited ``E_N``.
     **options
-        ``init``, ``seed``, ``tol``, ``iterations``, ``time_limit``, ``restart_every``, ``callback``,
-        ``checkpoint``, ``checkpoint_seconds``, ``checkpoint_iterations``, ``resume``: see
-        ``stipple.halftone.run``. ``init`` may be an (M, 2) array in unit coordinates.
+        ``init``, ``seed``, ``tol``, ``settle``, ``iterations``, ``time_limit``, ``restart_every``, ``beta``,
+        ``callback``, ``checkpoint``, ``checkpoint_seconds``, ``checkpoint_iterations``, ``resume``, ``correct``:
+        see ``stipple.halftone.run``. ``init`` may be an (M, 2) array in unit coordinates.
 
     Returns
     -------
