@@ -15,6 +15,7 @@ from .halftone import (
     check_memory,
     check_threads,
     default_threads,
+    even_at_least_2,
     hexagonal_spacing,
     peak_ratio,
     run,
@@ -70,7 +71,7 @@ def torus_scale(shape):
 def axis_bandwidths(bandwidth, shape):
     """Per-axis bandwidths ``(N1, N2)`` (x, y), even, giving the same resolution in both directions."""
     scale = torus_scale(shape)
-    return tuple(int(max(2, 2 * round(bandwidth * s / 2))) for s in scale)
+    return tuple(even_at_least_2(bandwidth * s) for s in scale)
 
 
 def cell_factor(k, cells):
