@@ -270,6 +270,7 @@ def line_problem(
         factor=float(np.prod(scale)),
         hessian=hessian,
         exclude=curve_neighbours(n_vertices, steps),
+        threads=discrepancy.threads,
     )
     mu = penalty * penalty_scale(discrepancy, n_vertices)
     speed = SpeedConstraint(step, mu, scale, hessian)

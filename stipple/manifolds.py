@@ -21,7 +21,8 @@ class Torus:
         self._metric = self.scale**2
 
     def inner(self, points, u, v):
-        return float(np.sum(np.sum(u * v, axis=0) * self._metric))
+        # Per-axis sums first: einsum makes one pass without a temporary (M, 2) array.
+        return float(np.einsum("ij,ij->j", u, v) @ self._metric)
 
     def norm(self, points, v):
         return np.sqrt(self.inner(points, v, v))

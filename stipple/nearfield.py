@@ -11,8 +11,12 @@ list: pairs within ``eps (1 + skin)`` are searched again only when many points h
 ``eps skin / 2``; the few that did are looked up on their own.
 """
 
+import functools
+
 import numpy as np
 from scipy.spatial import cKDTree
+
+from .parallel import map_blocks
 
 
 class TorusPairs:
@@ -20,13 +24,15 @@ class TorusPairs:
 
     def __init__(self, scale):
         self.scale = np.asarray(scale, dtype=float)
+        # A square image needs no scaling (an (M, 2) product costs as much as a pair search patch).
+        self._unit_square = bool(np.all(self.scale == 1))
 
     def positions(self, points):
         """Physical positions in ``[0, scale)`` (``np.mod`` only when needed: it is slow, and CG's points are
         already wrapped)."""
         if points.min(initial=0.0) < 0 or points.max(initial=0.0) >= 1:
             points = np.mod(points, 1.0)
-        return points * self.scale
+        return points if self._unit_square else points * self.scale
 
     def tree(self, positions):
         return cKDTree(positions, boxsize=self.scale * (1 + 1e-12))
@@ -45,11 +51,11 @@ class TorusPairs:
 
     def to_physical(self, vectors):
         """Tangent vectors in unit coordinates as physical displacements."""
-        return vectors * self.scale
+        return vectors if self._unit_square else vectors * self.scale
 
     def covector(self, physical_gradient):
         """A gradient with respect to physical positions as a differential in unit coordinates."""
-        return physical_gradient * self.scale
+        return physical_gradient if self._unit_square else physical_gradient * self.scale
 
 
 class SpherePairs:
@@ -94,9 +100,12 @@ class NearField:
         Verlet-list margin as a fraction of the radius.
     exclude : callable, optional
         ``exclude(first, second) -> bool array``: index pairs left out of the sum (e.g. neighbours along a curve).
+    threads : int
+        Threads for the per-pair arithmetic (blocks of pairs, ``stipple.parallel``): the same bits for the same
+        count.
     """
 
-    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3, exclude=None):
+    def __init__(self, kernel, weight, geometry, factor=1.0, hessian="gauss-newton", skin=0.3, exclude=None, threads=1):
         self.kernel = kernel
         self.geometry = geometry
         self.pair_factor = 2 * weight**2 * factor
@@ -104,6 +113,7 @@ class NearField:
         self.hessian = hessian
         self.skin = skin
         self.exclude = exclude
+        self.threads = threads
         self._reference = None
         self.counts = {"pair_searches": 0}
 
@@ -120,22 +130,32 @@ class NearField:
             kept = ~self.exclude(first, second)
             first, second = first[kept], second[kept]
         columns = np.ascontiguousarray(positions.T)
-        delta = [self.geometry.wrap(column[first] - column[second], axis) for axis, column in enumerate(columns)]
-        distance = np.sqrt(sum(component * component for component in delta))
-        inside = np.flatnonzero(distance < self.kernel.radius)
-        first, second, distance = first[inside], second[inside], distance[inside]
-        value, slope, curvature = self.kernel.values_inside(distance)
-        safe = np.maximum(distance, 1e-9 * self.kernel.radius)
+        blocks = map_blocks(self.threads, functools.partial(self._pairs_inside, columns), first, second)
+        first, second, value_sum, slope, curvature, safe, *unit = (
+            _concatenate([block[item] for block in blocks]) for item in range(len(blocks[0]))
+        )
         self._points = points
         self._pairs = (first, second, len(points))
-        self._unit = [component[inside] / safe for component in delta]
-        self._energy = self.self_energy_per_point * len(points) + self.pair_factor * float(value.sum())
+        self._unit = unit
+        self._energy = self.self_energy_per_point * len(points) + self.pair_factor * float(value_sum.sum())
         self._slope = slope
         self._radial, self._tangential = curvature, slope / safe
         if self.hessian == "gauss-newton":
             self._radial, self._tangential = np.abs(self._radial), np.abs(self._tangential)
         self._radial_excess = self._radial - self._tangential
         self._gradient = None
+
+    def _pairs_inside(self, columns, first, second):
+        """The candidate pairs ``(first, second)`` closer than the radius (one block), as ``(first, second,
+        [sum of kernel values], slope, curvature, safe distance, *unit vector components)``."""
+        delta = [self.geometry.wrap(column[first] - column[second], axis) for axis, column in enumerate(columns)]
+        distance = np.sqrt(sum(component * component for component in delta))
+        inside = np.flatnonzero(distance < self.kernel.radius)
+        distance = distance[inside]
+        value, slope, curvature = self.kernel.values_inside(distance)
+        safe = np.maximum(distance, 1e-9 * self.kernel.radius)
+        unit = [component[inside] / safe for component in delta]
+        return first[inside], second[inside], np.array([value.sum()]), slope, curvature, safe, *unit
 
     def _update_candidates(self, positions):
         """Candidate pairs for the current positions: the Verlet list, patched for the few points that moved far.
@@ -192,8 +212,10 @@ class NearField:
         """``dE/dx_i = 2 lam² factor sum_j K_near'(r_ij) (x_i - x_j) / r_ij`` as a differential."""
         if self._gradient is None:
             force = self.pair_factor * self._slope
-            self._gradient = self._scatter([force * unit for unit in self._unit])
-        return self.geometry.covector(self._gradient)
+            self._gradient = self.geometry.covector(self._scatter([force * unit for unit in self._unit]))
+            # Kept for later calls and returned as it is (not copied): read-only.
+            self._gradient.flags.writeable = False
+        return self._gradient
 
     def _scatter(self, pair_components):
         """``sum_j v_ij`` at ``i`` minus the same at ``j``, for one vector per pair (given by components)."""
@@ -251,6 +273,11 @@ class NearField:
     def _weingarten_vector(self, vector):
         weights = self._curvature_weights()
         return 0.0 if weights is None else weights[:, None] * vector
+
+
+def _concatenate(blocks):
+    """One array from one or more blocks (no copy for one)."""
+    return blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
 
 
 def _ordered(first, second, count):

@@ -2,6 +2,8 @@
 
 import numpy as np
 
+from .parallel import map_blocks, sum_blocks
+
 
 class Discrepancy:
     """``E(p) = sum_l mult_l k_l |F_l(p)|^2`` with ``F_l = lam * sum_i conj(psi_l(p_i)) - w_l``.
@@ -42,6 +44,8 @@ class Discrepancy:
         if hessian == "full" and not hasattr(fourier, "hessian_synthesis"):
             raise ValueError("hessian='full' is only available on the torus")
         self.fourier = fourier
+        # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
+        self.threads = getattr(fourier, "threads", 1)
         self.kernel = kernel
         # Weights in sums over the whole spectrum; on the torus (multiplicity 1) the kernel itself, not a copy:
         # at M = 10^6 every mode-grid array is 112-224 MB.
@@ -66,9 +70,13 @@ class Discrepancy:
         """Move to ``points`` and compute the residual ``F`` there."""
         self.fourier.set_points(points)
         residual = self.fourier.analysis()
-        residual *= self.weight
-        residual -= self.target
+        map_blocks(self.threads, self._form_residual, residual, self.target)
         self._residual = residual
+
+    def _form_residual(self, sums, target):
+        """``F = lam c - w`` in place of the sums ``c`` (one block)."""
+        sums *= self.weight
+        sums -= target
 
     @property
     def residual(self):
@@ -81,10 +89,10 @@ class Discrepancy:
 
     def energy(self):
         residual = _real_view(self._residual)
-        quadratic = float(np.einsum("i,i,i->", self._pair_weights, residual, residual))
+        quadratic = sum_blocks(self.threads, _weighted_square, self._pair_weights, residual)
         if not self._has_cross:
             return quadratic
-        cross = -2 * float(np.einsum("i,i->", self._cross_dot, _real_view(self._residual)))
+        cross = -2 * sum_blocks(self.threads, _dot, self._cross_dot, residual)
         return quadratic + self._cross_constant + cross
 
     def bandlimited_energy(self):
@@ -98,7 +106,12 @@ class Discrepancy:
 
     def _synthesis_coeffs(self):
         """``k^R F - k^near w``: the coefficients whose gradient synthesis is ``dE/dp / (2 lam)``."""
-        return self.kernel * self._residual - self._cross_pull
+        coeffs = np.empty_like(self._residual)
+        if self._has_cross:
+            map_blocks(self.threads, _product_minus, coeffs, self.kernel, self._residual, self._cross_pull)
+        else:
+            map_blocks(self.threads, np.multiply, self.kernel, self._residual, coeffs)
+        return coeffs
 
     def gradient(self):
         """``dE/dp_i = 2 lam Re sum_l (k^R_l F_l - k^near_l w_l) grad psi_l(p_i)``."""
@@ -130,6 +143,20 @@ class Discrepancy:
             curvature = 2 * self.weight * self.fourier.hessian_synthesis(self._synthesis_coeffs())
             products = [hv + np.einsum("mij,mj->mi", curvature, v) for hv, v in zip(products, vectors, strict=True)]
         return products
+
+
+def _weighted_square(weights, values):
+    return np.einsum("i,i,i->", weights, values, values)
+
+
+def _dot(first, second):
+    return np.einsum("i,i->", first, second)
+
+
+def _product_minus(out, first, second, subtracted):
+    """``out = first * second - subtracted`` (one block)."""
+    np.multiply(first, second, out=out)
+    out -= subtracted
 
 
 def _times_multiplicity(values, multiplicity):

@@ -281,7 +281,7 @@ def sphere_problem(
         near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
         cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
         discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
-        objective = SumObjective(discrepancy, NearField(near, weight, SpherePairs()))
+        objective = SumObjective(discrepancy, NearField(near, weight, SpherePairs(), threads=threads))
     else:
         objective = discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
     return Problem(

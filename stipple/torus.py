@@ -155,7 +155,9 @@ def torus_problem(
         near = torus_near_kernel(bandwidth, scale)
         cross_kernel = radial_on_modes(near.plane_coefficients, bandwidths, scale)
         discrepancy = Discrepancy(fourier, kernel - cross_kernel, target, weight, hessian, cross_kernel)
-        pairs = NearField(near, weight, TorusPairs(scale), factor=np.prod(scale), hessian=hessian)
+        pairs = NearField(
+            near, weight, TorusPairs(scale), factor=np.prod(scale), hessian=hessian, threads=fourier.threads
+        )
         objective = SumObjective(discrepancy, pairs)
     else:
         objective = discrepancy = Discrepancy(fourier, kernel, target, weight, hessian)

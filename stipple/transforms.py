@@ -14,10 +14,9 @@ Two layers:
   ``multiplicity`` weights each stored coefficient in sums over the whole (real-symmetric) spectrum.
 """
 
-import functools
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
+
+from .parallel import map_blocks, sum_blocks, thread_pool
 
 BACKENDS = ("ducc0", "finufft")
 
@@ -129,9 +128,13 @@ class ResidueSplitNufft:
         self._full.set_points(points)
         folded = np.array(points, dtype=np.float64)
         folded[:, 0] = np.mod(self.threads * folded[:, 0], 1.0)
-        for _, _, nufft in self._classes:
+
+        def one_class(residue):
+            offset, _, nufft = self._classes[residue]
             nufft.set_points(folded)
-        self._phases = [np.exp(-2j * np.pi * offset * points[:, 0]) for offset, _, _ in self._classes]
+            return np.exp(-2j * np.pi * offset * points[:, 0])
+
+        self._phases = list(thread_pool(self.threads).map(one_class, range(self.threads)))
         self.counts["set_points"] += 1
 
     def type1(self, values):
@@ -143,17 +146,12 @@ class ResidueSplitNufft:
             _, first_row, nufft = self._classes[residue]
             out[:, first_row :: self.threads] = nufft.type1(values * self._phases[residue])
 
-        list(_thread_pool(self.threads).map(one_class, range(self.threads)))
+        list(thread_pool(self.threads).map(one_class, range(self.threads)))
         return out
 
     def type2(self, coeffs):
         self.counts["type2"] += len(coeffs)
         return self._full.type2(coeffs)
-
-
-@functools.cache
-def _thread_pool(threads):
-    return ThreadPoolExecutor(threads, thread_name_prefix="stipple-nufft")
 
 
 # Below this many rows per thread, the split costs more than it saves and one thread does all.
@@ -186,6 +184,8 @@ class TorusFourier:
 
     def __init__(self, nufft):
         self.nufft = nufft
+        # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
+        self.threads = nufft.threads
         self.modes = torus_modes(nufft.shape)
         self.multiplicity = 1.0
         n1, n2 = self.modes
@@ -206,7 +206,7 @@ class TorusFourier:
         """Tangent fields ``Re sum_n a_n (2 pi i n) e^{2 pi i n.u_i}`` for a list of Hermitian arrays."""
         packed = np.empty((len(coeffs),) + self.nufft.shape, dtype=np.complex128)
         for out, a in zip(packed, coeffs, strict=True):
-            np.multiply(self._synthesis_factor, a, out=out)
+            map_blocks(self.threads, np.multiply, self._synthesis_factor, a, out)
         values = self.nufft.type2(packed)
         return [np.stack([v.real, v.imag], axis=1) for v in values]
 
@@ -244,10 +244,9 @@ class TorusFourier:
         gram = np.empty((count, count))
         for a in range(count):
             for b in range(a, count):
-                direct = np.einsum("ij,ij,ij->", same, packed[a].real, packed[b].real)
-                direct += np.einsum("ij,ij,ij->", same, packed[a].imag, packed[b].imag)
-                cross = np.einsum("ij,ij,ij->", mirrored, packed[a], packed[b, ::-1, ::-1]).real
-                gram[a, b] = gram[b, a] = direct + cross
+                gram[a, b] = gram[b, a] = sum_blocks(
+                    self.threads, _packed_gram_terms, same, mirrored, packed[a], packed[b], packed[b, ::-1, ::-1]
+                )
         return gram
 
     def hessian_synthesis(self, coeffs):
@@ -257,6 +256,13 @@ class TorusFourier:
         first, second = self.nufft.type2(np.stack([scaled * n1 * (n1 + 1j * n2), scaled * n2 * n2]))
         h11, h12, h22 = first.real, first.imag, second.real
         return np.stack([np.stack([h11, h12], axis=1), np.stack([h12, h22], axis=1)], axis=1)
+
+
+def _packed_gram_terms(same, mirrored, first, second, second_mirrored):
+    """One block of ``jacobian_gram``'s sums: ``sum same Re(conj(Ta) Tb) + Re sum mirrored Ta Tb_-n``."""
+    direct = np.einsum("ij,ij,ij->", same, first.real, second.real)
+    direct += np.einsum("ij,ij,ij->", same, first.imag, second.imag)
+    return direct + np.einsum("ij,ij,ij->", mirrored, first, second_mirrored).real
 
 
 def alm_size(lmax):
