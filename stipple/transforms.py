@@ -104,7 +104,8 @@ class ResidueSplitNufft:
     ``exp(-2 pi i n.p) = exp(-2 pi i o_r x) exp(-2 pi i (m', n2).(T x, y))`` with ``n1 = T m' + o_r`` and
     ``m'`` in the class grid's own centred range. The classes run at once and fill disjoint rows; together they
     cost one transform's FFT and ``T`` spreads. Type-2 transforms interpolate each point on its own and are
-    deterministic with the backend's threads.
+    deterministic with the backend's threads; their plan is made at the first type-2 transform after
+    ``set_points`` (a grid used for type-1 transforms only never makes it).
     """
 
     def __init__(self, backend_class, shape, epsilon, threads):
@@ -123,9 +124,10 @@ class ResidueSplitNufft:
             first_row = threads * low + residue + half
             self._classes.append((offset, first_row, backend_class((size, self.shape[1]), epsilon, 1)))
         self._phases = None
+        self._full_points = None
 
     def set_points(self, points):
-        self._full.set_points(points)
+        self._full_points = points
         folded = np.array(points, dtype=np.float64)
         folded[:, 0] = np.mod(self.threads * folded[:, 0], 1.0)
 
@@ -151,6 +153,9 @@ class ResidueSplitNufft:
 
     def type2(self, coeffs):
         self.counts["type2"] += len(coeffs)
+        if self._full_points is not None:
+            self._full.set_points(self._full_points)
+            self._full_points = None
         return self._full.type2(coeffs)
 
 
@@ -186,21 +191,38 @@ class TorusFourier:
         self.nufft = nufft
         # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
         self.threads = nufft.threads
+        # ``analysis`` sums real values, so c_-n = conj(c_n): it transforms the rows n1 >= 0 only, on an odd grid
+        # of at least N1/2 + 1 rows whose centre row is n1 = half_offset, and mirrors them.
+        half_rows = nufft.shape[0] // 2 + 1
+        half_rows += 1 - half_rows % 2
+        self.half_nufft = make_nufft(nufft.name, (half_rows, nufft.shape[1]), nufft.epsilon, nufft.threads)
+        self._half_offset = half_rows // 2
+        self._half_phase = None
         self.modes = torus_modes(nufft.shape)
         self.multiplicity = 1.0
         n1, n2 = self.modes
         self._synthesis_factor = 2j * np.pi * (n1 + 1j * n2)
         self._analysis_factors = (-1j * np.pi * (n1 - 1j * n2), -1j * np.pi * (n1 + 1j * n2))
         self._gram_weights = None
-        self._ones = None
+
+    @property
+    def counts(self):
+        """Transforms made so far on both grids: ``type1``, ``type2``, ``set_points`` (plans)."""
+        return {key: self.nufft.counts[key] + self.half_nufft.counts[key] for key in self.nufft.counts}
 
     def set_points(self, points):
         self.nufft.set_points(points)
-        if self._ones is None or len(self._ones[0]) != len(points):
-            self._ones = np.ones((1, len(points)), dtype=np.complex128)
+        self.half_nufft.set_points(points)
+        self._half_phase = np.exp(-2j * np.pi * self._half_offset * points[:, 0])[None]
 
     def analysis(self):
-        return self.nufft.type1(self._ones)[0]
+        """``c_n = sum_i exp(-2 pi i n.p_i)``: the rows ``n1 >= 0`` transformed, the others their mirror image."""
+        half = self.half_nufft.type1(self._half_phase)[0]
+        rows = self.nufft.shape[0] // 2
+        sums = np.empty(self.nufft.shape, dtype=np.complex128)
+        map_blocks(self.threads, np.copyto, sums[rows:], half[: rows + 1])
+        map_blocks(self.threads, np.conjugate, half[rows:0:-1, ::-1], sums[:rows])
+        return sums
 
     def gradient_synthesis(self, coeffs):
         """Tangent fields ``Re sum_n a_n (2 pi i n) e^{2 pi i n.u_i}`` for a list of Hermitian arrays."""

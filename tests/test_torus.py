@@ -100,7 +100,7 @@ def test_type1_fields_per_iteration(beta, fields_per_iteration):
     weights = np.outer(np.linspace(0.1, 1, 16), np.ones(16))
     problem = torus_problem(weights, 200, 30, threads=1, near_field=False)
     result = run(problem, init="density", iterations=12, tol=1e-12, beta=beta)
-    counts = problem.discrepancy.fourier.nufft.counts
+    counts = problem.discrepancy.fourier.counts
     assert result.iterations == 12
     assert counts["type1"] == 2 + fields_per_iteration * 12
     assert counts["type2"] == 1 + 12

@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+import stipple.transforms
 from stipple.transforms import (
     BACKENDS,
     Ducc0Nufft,
@@ -88,3 +89,19 @@ def test_packed_gradient_transforms_match_direct_formulas(rng):
     np.testing.assert_allclose(fourier.gradient_analysis([vectors])[0], expected, atol=1e-10)
     second = np.einsum("xy,mxy->m", -4 * np.pi**2 * n1 * n2 * coeffs, matrix.conj()).real
     np.testing.assert_allclose(fourier.hessian_synthesis(coeffs)[:, 0, 1], second, atol=1e-9)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("shape", [(9, 7), (11, 5), (13, 9)])
+def test_analysis_mirrors_its_half_grid_into_the_direct_sums(monkeypatch, backend, threads, shape, rng):
+    """``analysis`` transforms the rows n1 >= 0 (N1/2 even and odd: the half grid gets an extra row or not) and
+    mirrors them; with 2 threads both grids take the residue split."""
+    monkeypatch.setattr(stipple.transforms, "MIN_ROWS_PER_THREAD", 1)
+    points = rng.random((50, 2)) * 3 - 1
+    fourier = TorusFourier(make_nufft(backend, shape, 1e-12, threads))
+    assert fourier.half_nufft.shape[0] % 2 == 1 and fourier.half_nufft.shape[0] >= shape[0] // 2 + 1
+    assert isinstance(fourier.half_nufft, ResidueSplitNufft) == (threads > 1)
+    fourier.set_points(points)
+    np.testing.assert_allclose(fourier.analysis(), direct_matrix(points, shape).sum(0), atol=1e-10)
+    assert fourier.counts["type1"] == 1
