@@ -127,7 +127,7 @@ class ResidueSplitNufft:
         self._full_points = None
 
     def set_points(self, points):
-        self._full_points = points
+        self._full_points = np.array(points, dtype=np.float64)  # a copy: the caller may reuse its array
         folded = np.array(points, dtype=np.float64)
         folded[:, 0] = np.mod(self.threads * folded[:, 0], 1.0)
 

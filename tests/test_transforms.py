@@ -105,3 +105,14 @@ def test_analysis_mirrors_its_half_grid_into_the_direct_sums(monkeypatch, backen
     fourier.set_points(points)
     np.testing.assert_allclose(fourier.analysis(), direct_matrix(points, shape).sum(0), atol=1e-10)
     assert fourier.counts["type1"] == 1
+
+
+def test_residue_split_type2_uses_the_points_given_to_set_points(rng):
+    """The type-2 plan is made at the first type-2 transform: from the points as they were at ``set_points``."""
+    shape = (13, 9)
+    points = rng.random((40, 2))
+    expected = np.einsum("bxy,mxy->bm", np.ones((1,) + shape), direct_matrix(points, shape).conj())
+    nufft = ResidueSplitNufft(Ducc0Nufft, shape, 1e-12, 2)
+    nufft.set_points(points)
+    points[:] = 0.5  # the caller reuses its array
+    np.testing.assert_allclose(nufft.type2(np.ones((1,) + shape, dtype=np.complex128)), expected, atol=1e-9)
