@@ -26,7 +26,7 @@ from .manifolds import Torus
 from .nearfield import NearField, TorusPairs
 from .objective import Discrepancy, SumObjective
 from .sampling import sample_image, stratified_sample
-from .transforms import BACKENDS, TorusFourier, make_nufft
+from .transforms import BACKENDS, TorusFourier, centred_modes, make_nufft
 
 # Transform accuracy: at M = 10^6 the energy after 8 CG iterations moved by 4e-9 of itself against 1e-9, at
 # 10 % less time per iteration (README, Defaults).
@@ -91,7 +91,7 @@ def image_coefficients(weights, bandwidths):
     """
     rows, columns = weights.shape
     spectrum = np.fft.fft2(weights)
-    n1, n2 = (np.arange(-(bandwidth // 2), bandwidth // 2 + 1) for bandwidth in bandwidths)
+    n1, n2 = (centred_modes(bandwidth) for bandwidth in bandwidths)
     dft = spectrum[np.ix_(n2 % rows, n1 % columns)].T
     factors = np.outer(cell_factor(n1, columns), cell_factor(n2, rows)) / (rows * columns)
     return np.ascontiguousarray(dft * factors)
@@ -104,7 +104,7 @@ def radial_on_modes(radial, bandwidths, scale):
     """
     n1, n2 = (np.arange(bandwidth // 2 + 1) for bandwidth in bandwidths)
     quadrant = radial(np.hypot.outer(n1 / scale[0], n2 / scale[1]))
-    mirror = [np.abs(np.arange(-(bandwidth // 2), bandwidth // 2 + 1)) for bandwidth in bandwidths]
+    mirror = [np.abs(centred_modes(bandwidth)) for bandwidth in bandwidths]
     return quadrant[np.ix_(*mirror)]
 
 

@@ -173,9 +173,14 @@ def make_nufft(backend, shape, epsilon, threads):
     return classes[backend](shape, epsilon, 1)
 
 
+def centred_modes(bandwidth):
+    """The integer frequencies ``-N/2 .. N/2`` of one axis of a centred mode array (``N + 1`` of them)."""
+    return np.arange(-(bandwidth // 2), bandwidth // 2 + 1)
+
+
 def torus_modes(shape):
     """Integer frequency grids ``(n1, n2)`` of a centred mode array of ``shape = (N1+1, N2+1)``."""
-    axes = [np.arange(-(size // 2), size // 2 + 1, dtype=float) for size in shape]
+    axes = [centred_modes(size - 1).astype(float) for size in shape]
     return np.meshgrid(*axes, indexing="ij")
 
 
