@@ -17,7 +17,7 @@ from PIL import Image
 
 from stipple.colour import halftone_colour
 from stipple.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
-from stipple.outputs import layered_torus_output
+from stipple.io.writers import layered_torus_output
 
 
 def load(path, size):

@@ -24,7 +24,7 @@ import numpy as np
 
 from stipple.allocator import reuse_freed_memory
 from stipple.halftone import default_threads, run
-from stipple.inputs import load_density
+from stipple.io.images import load_density
 from stipple.sphere import CellMap, from_lon_lat, sphere_problem
 from stipple.torus import torus_problem
 from stipple.transforms import alm_size, spherical_angles

@@ -3,7 +3,7 @@
 from .design import spherical_design
 from .errors import StippleError
 from .halftone import HalftoneResult
-from .inputs import load_density
+from .io.images import load_density
 from .sphere import halftone_sphere
 from .torus import halftone_torus
 

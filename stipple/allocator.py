@@ -6,6 +6,8 @@ oversampled grids), so every page of them is faulted in and zeroed by the kernel
 there, a third of the process's CPU time was system time. ``reuse_freed_memory`` makes glibc serve large
 blocks from its heap and keep what is freed for the next allocation, at the cost of a heap that does not
 shrink until the process ends. The command line calls it once at start-up; the library never does.
+
+``available_memory`` tells how much a new allocation may take (checked before large runs and pictures).
 """
 
 import ctypes
@@ -42,3 +44,15 @@ def reuse_freed_memory():
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
     settings = ((M_ARENA_MAX, 1), (M_MMAP_MAX, 0), (M_TRIM_THRESHOLD, -1))
     return all(mallopt(parameter, value) == 1 for parameter, value in settings)
+
+
+def available_memory():
+    """Bytes of memory available to a new allocation (MemAvailable on Linux, else physical memory)."""
+    try:
+        with open("/proc/meminfo") as stream:
+            for line in stream:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")

@@ -20,7 +20,7 @@ from itertools import combinations
 import numpy as np
 
 from .errors import StippleError
-from .inputs import load_colour
+from .io.images import load_colour
 from .multiclass import multiclass_problem, run
 
 SEPARATIONS = ("cmyk", "cmy", "gray")
@@ -41,7 +41,7 @@ def parse_palette(text):
 
     Returns the separation's name, or a list of ``(name, rgb)`` pens (the name is the colour as given).
     """
-    from .outputs import parse_colour
+    from .io.units import parse_colour
 
     text = str(text).strip()
     if text.lower() in SEPARATIONS:
@@ -157,7 +157,7 @@ def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.
     Parameters
     ----------
     rgb : numpy.ndarray or path
-        ``(H, W, 3)`` colours in [0, 1], or an image file (``stipple.inputs.load_colour``).
+        ``(H, W, 3)`` colours in [0, 1], or an image file (``stipple.io.images.load_colour``).
     n_points : int
         Dots in all; each ink gets its share by mass (``stipple.multiclass.class_counts``).
     bandwidth : int, optional

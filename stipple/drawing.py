@@ -114,3 +114,39 @@ def ellipse_polygon(centre, radius, squash=1.0, angle=0.0, segments=24):
     local = radius * (squash * np.cos(t) + 1j * np.sin(t)) * np.exp(1j * angle)
     z = complex(centre[0], centre[1]) + local
     return list(zip(z.real, z.imag, strict=True))
+
+
+def ink_radius(ink_area, count):
+    """Radius at which ``count`` discs cover ``ink_area`` (the density's mass): the mean tone is kept."""
+    return float(np.sqrt(ink_area / (np.pi * count)))
+
+
+ORTHO_SIZE = 1000.0
+PROJECTIONS = ("ortho", "equirect")
+
+
+def sphere_canvas(projection, fmt=".png"):
+    """``(width, height)`` in user units of a sphere picture (SVG or PNG): the equirectangular map or the globe."""
+    if projection == "equirect":
+        return (ORTHO_SIZE * 2, ORTHO_SIZE)
+    return (ORTHO_SIZE, ORTHO_SIZE)
+
+
+GLOBE = 0.98  # the globe's radius over half the canvas
+
+
+def orthographic(points, view):
+    """Canvas positions (``ORTHO_SIZE`` square, y down) of unit vectors seen from ``view``, and their depth
+    (cosine of the angle from the view's centre; positive on the visible side)."""
+    lon, lat = np.radians(view)
+    centre = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
+    north = np.cross(centre, east)
+    half = ORTHO_SIZE / 2
+    xy = np.stack([half + GLOBE * half * (points @ east), half - GLOBE * half * (points @ north)], axis=1)
+    return xy, points @ centre
+
+
+def equirectangular(longitude, latitude, width):
+    """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, lon -180 at the left."""
+    return np.stack([(longitude + 180) / 360 * width, (90 - latitude) / 180 * width / 2], axis=1)

@@ -367,7 +367,7 @@ def evaluate_sphere(problem, points, density):
 
 def line_ink(pixels, shape, pen_width=1.0, closed=True):
     """Ink (0 white .. 1 black) of a polyline through ``pixels`` drawn ``pen_width`` pixels wide, per pixel."""
-    from .outputs import render_line
+    from .io.png import render_line
 
     rows, columns = shape
     image = render_line(pixels, (columns, rows), columns, pen_width, closed=closed)

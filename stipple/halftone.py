@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from . import allocator
 from .errors import StippleError
 from .optimize import BETAS, OptimizeResult, initial_state, minimize
 
@@ -104,21 +105,9 @@ def peak_ratio(values, areas=None, mass_fraction=0.01):
     return float(max(level / (mass[-1] / areas.sum()), 1.0))
 
 
-def available_memory():
-    """Bytes of memory available to a new allocation (MemAvailable on Linux, else physical memory)."""
-    try:
-        with open("/proc/meminfo") as stream:
-            for line in stream:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-
-
 def check_memory(needed, what):
     """Refuse a problem whose estimated working memory exceeds what the machine has available."""
-    available = available_memory()
+    available = allocator.available_memory()
     if needed > available:
         raise StippleError(
             f"{what} needs about {needed / 2**30:.1f} GiB of memory, more than the {available / 2**30:.1f} GiB "
@@ -206,7 +195,7 @@ def run(
         version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main
         run leaves ``COARSE_TIME_SHARE`` of it to the correction.
     """
-    from .checkpoint import Checkpointer, load_checkpoint
+    from .io.checkpoint import Checkpointer, load_checkpoint
 
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)

@@ -19,7 +19,7 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import HalftoneResult, Problem, check_count, check_positive, run
-from .manifolds import Torus
+from .manifolds import Rectangle
 from .nearfield import NearField, TorusPairs
 from .objective import SumObjective
 from .sampling import hilbert_index, sample_image
@@ -135,62 +135,6 @@ class SpeedConstraint:
             segment += 2 / self.step**2 * self._bend[:, None] * difference
             products.append(self._scatter(self.weight * segment))
         return products
-
-
-class Rectangle(Torus):
-    """The image's rectangle inside a larger torus: a step is clipped to the rectangle instead of wrapped.
-
-    The torus is the image with a blank margin on every side (``blank_margin``). The transforms stay periodic,
-    but opposite edges of the image are two margins of white paper apart. Without the margin, vertices clipped
-    to the top and to the bottom edge sit on the same line of the torus (on the portrait, M = 20000: PSNR
-    22.8/25.0 dB at sigma 2/4 px without it, 26.2/28.1 with it). Points are stored in the torus's unit
-    coordinates; ``inward`` and ``outward`` convert from and to the image's unit coordinates.
-
-    Parameters
-    ----------
-    scale : array_like
-        Physical side lengths of the torus (``torus_scale`` of the padded grid).
-    low, high : array_like
-        Corners ``(x, y)`` of the image's rectangle in the torus's unit coordinates.
-    """
-
-    def __init__(self, scale, low=(0.0, 0.0), high=(1.0, 1.0)):
-        super().__init__(scale)
-        self.low = np.asarray(low, dtype=float)
-        self.high = np.asarray(high, dtype=float)
-
-    def retract(self, points, v):
-        return np.clip(points + v, self.low, self.high)
-
-    def riesz(self, points, covector):
-        """The gradient, less its components into a wall at the vertices resting on one.
-
-        Those components cannot be followed; left in, CG's Newton step and conjugate directions count motion
-        that the clip takes away (measured on the portrait: the speed constraint then never held, max/mean
-        segment 1.63 after eight penalty phases, against 1.001 after four).
-        """
-        gradient = super().riesz(points, covector)
-        return np.where(self._blocked(points, -gradient), 0.0, gradient)
-
-    def transport(self, points, v, w):
-        """``w`` at the retracted points, less its components into a wall there."""
-        moved = self.retract(points, v)
-        return np.where(self._blocked(moved, w), 0.0, w)
-
-    def _blocked(self, points, motion):
-        """Components of ``motion`` that push a vertex resting on a wall further out."""
-        return ((points <= self.low) & (motion < 0)) | ((points >= self.high) & (motion > 0))
-
-    def canonical(self, points):
-        return np.clip(np.asarray(points, dtype=np.float64), self.low, self.high)
-
-    def inward(self, points):
-        """Image unit coordinates to torus unit coordinates."""
-        return self.low + np.asarray(points, dtype=np.float64) * (self.high - self.low)
-
-    def outward(self, points):
-        """Torus unit coordinates to image unit coordinates."""
-        return (np.asarray(points, dtype=np.float64) - self.low) / (self.high - self.low)
 
 
 def blank_margin(length, shape):
@@ -416,9 +360,9 @@ def draw_line(
     import os
     import time
 
-    from .checkpoint import Checkpointer
     from .halftone import _chain
-    from .inputs import load_density
+    from .io.checkpoint import Checkpointer
+    from .io.images import load_density
 
     if isinstance(image, (str, os.PathLike)):
         image = load_density(image)

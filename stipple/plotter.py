@@ -76,6 +76,13 @@ def plotter_order(centres):
     return order, path_length(centres), path_length(centres[order])
 
 
+def physical_centres(points, shape, width):
+    """Torus points (unit coordinates of an image of ``shape = (H, W)``) on the SVG's physical canvas, in the
+    unit of ``width = (value, unit)``."""
+    rows, columns = shape
+    return points * np.array([columns, rows]) * (width[0] / columns)
+
+
 DOT_STYLES = ("circle", "filled", "point")
 SEGMENTS_PER_TURN = 24
 

@@ -20,7 +20,7 @@ from .halftone import (
     peak_ratio,
     run,
 )
-from .inputs import check_grid, load_density
+from .io.images import check_grid, load_density, load_input
 from .kernels import NearKernel, chord_profile, sphere_kernel
 from .manifolds import Sphere
 from .nearfield import NearField, SpherePairs
@@ -373,3 +373,19 @@ BUILTINS = {
     "rbf": AnalyticDensity(rbf_node_density, "builtin:rbf"),
     "uniform": UniformDensity(),
 }
+
+
+def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_range=None, lon0=0.0):
+    """The density of a map (``-`` is stdin), a built-in name (``builtin:NAME``) or, with ``uniform``, w ≡ 1."""
+    if uniform:
+        if source is not None:
+            raise StippleError("give either MAP or --uniform, not both")
+        return BUILTINS["uniform"]
+    if source is None:
+        raise StippleError("missing MAP (a .npy map, an image, builtin:NAME) or --uniform")
+    if source.startswith("builtin:"):
+        name = source.partition(":")[2]
+        if name not in BUILTINS:
+            raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
+        return BUILTINS[name]
+    return CellMap(load_input(source, invert=invert, gamma=gamma, value_range=value_range), lon0)

@@ -20,7 +20,7 @@ from .halftone import (
     peak_ratio,
     run,
 )
-from .inputs import check_grid, load_density
+from .io.images import check_grid, load_density
 from .kernels import NearKernel, ball_kernel, ball_profile
 from .manifolds import Torus
 from .nearfield import NearField, TorusPairs

@@ -97,7 +97,7 @@ def test_usage_errors_exit_two(image_path):
 def test_run_options_reach_the_run(image_path):
     """--beta daniel with --settle 0 and --no-correct is 0.1's method: the same points as the library's run."""
     from stipple.halftone import run as library_run
-    from stipple.inputs import load_density
+    from stipple.io.images import load_density
     from stipple.torus import torus_problem
 
     args = ["torus", image_path, "-M", 150, "-N", 24, "--iterations", 30, "--threads", 1, "-q"]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from stipple.inputs import load_density
+from stipple.io.images import load_density
 
 
 def saved(image, fmt, **kwargs):

@@ -7,10 +7,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from stipple.cli import parse_every, parse_view
+from stipple.cli.options import parse_view
+from stipple.cli.supervise import parse_every
 from stipple.errors import StippleError
-from stipple.inputs import NPY_MAGIC, load_density, read_points_csv
-from stipple.outputs import UNITS, parse_length
+from stipple.io.images import NPY_MAGIC, load_density
+from stipple.io.points import read_points_csv
+from stipple.io.units import UNITS, parse_length
 
 FAST = settings(max_examples=150, deadline=None, derandomize=True)
 SHAPES = st.tuples(st.integers(0, 5), st.integers(0, 5)) | st.tuples(st.integers(1, 3))

@@ -7,7 +7,7 @@ import subprocess
 import pytest
 from safety_helpers import FAST, invoke, leftovers, make_image, refused, snapshot
 
-import stipple.outputs
+import stipple.io.commit
 
 OUTPUTS = ["-o", "a.csv", "-o", "b.svg", "-o", "c.png"]
 
@@ -137,9 +137,9 @@ def test_stdout_item_is_written_before_files_are_renamed(tmp_path, monkeypatch):
     (tmp_path / "a.csv").write_text("old\n")
 
     def broken(data):
-        raise stipple.outputs.StippleError("cannot write to stdout (Broken pipe)")
+        raise stipple.io.commit.StippleError("cannot write to stdout (Broken pipe)")
 
-    monkeypatch.setattr(stipple.outputs, "write_stdout", broken)
-    with pytest.raises(stipple.outputs.StippleError):
-        stipple.outputs.commit_outputs([(str(tmp_path / "a.csv"), b"new\n"), ("-", b"x")])
+    monkeypatch.setattr(stipple.io.commit, "write_stdout", broken)
+    with pytest.raises(stipple.io.commit.StippleError):
+        stipple.io.commit.commit_outputs([(str(tmp_path / "a.csv"), b"new\n"), ("-", b"x")])
     assert (tmp_path / "a.csv").read_text() == "old\n" and leftovers(tmp_path) == []

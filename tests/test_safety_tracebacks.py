@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from safety_helpers import FAST, invoke, make_image, refused, snapshot
 
-import stipple.inputs
+import stipple.io.sources
 
 RESUME = ["torus", "in.png", "-M", "30", "-N", "8", "--iterations", "4", "-q", "--resume", "-o", "out.csv"]
 
@@ -35,17 +35,17 @@ def test_npy_header_declaring_seven_tebibytes(folder):
 
 
 def test_endless_image_input_is_capped(folder, monkeypatch):
-    monkeypatch.setattr(stipple.inputs, "MAX_INPUT_BYTES", 1 << 20)
+    monkeypatch.setattr(stipple.io.sources, "MAX_INPUT_BYTES", 1 << 20)
     refused(["torus", "/dev/zero", *FAST, "-o", "out.csv"], folder, "/dev/zero: input is longer than the 1048576")
 
 
 def test_endless_points_input_is_capped(folder, monkeypatch):
-    monkeypatch.setattr(stipple.inputs, "MAX_INPUT_BYTES", 1 << 20)
+    monkeypatch.setattr(stipple.io.sources, "MAX_INPUT_BYTES", 1 << 20)
     refused(["render", "/dev/zero", "-o", "out.csv"], folder, "input is longer than")
 
 
 def test_oversized_regular_file_is_refused_before_reading(folder, monkeypatch):
-    monkeypatch.setattr(stipple.inputs, "MAX_INPUT_BYTES", 20)
+    monkeypatch.setattr(stipple.io.sources, "MAX_INPUT_BYTES", 20)
     refused(["torus", "in.png", *FAST, "-o", "out.csv"], folder, "more than the 20 bytes read at most")
 
 
@@ -86,7 +86,7 @@ OPTIONS = {
 
 @pytest.mark.parametrize("args,message", OPTIONS.values(), ids=OPTIONS.keys())
 def test_bad_numbers_and_point_sets(folder, args, message, monkeypatch):
-    monkeypatch.setattr("stipple.halftone.available_memory", lambda: 2**34)  # the same answer on every machine
+    monkeypatch.setattr("stipple.allocator.available_memory", lambda: 2**34)  # the same answer on every machine
     (folder / "big.csv").write_text("x,y\n1e308,5\n2,3\n")
     (folder / "one.csv").write_text("x,y\n1.5,2.5\n")
     (folder / "s1.csv").write_text("lon,lat\n10,20\n")

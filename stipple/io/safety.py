@@ -7,7 +7,7 @@ device and inode (hard links), so ``-o ./link-to-input.png`` is caught as well a
 import fcntl
 import os
 
-from .errors import StippleError
+from ..errors import StippleError
 
 
 def _identity(path):

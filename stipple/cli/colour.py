@@ -1,24 +1,17 @@
-"""``stipple colour``: one class of dots per ink of a colour image, optimised jointly (registered in ``cli``)."""
+"""``stipple colour``: one class of dots per ink of a colour image, optimised jointly."""
 
 import time
 
 import click
 
-from .cli import (
-    common_options,
-    finish,
-    guarded_files,
-    palette_options,
-    physical_centres,
-    plot_order,
-    render_settings,
-    solve,
-    write_outputs,
-)
-from .errors import StippleError
-from .halftone import INITS
-from .outputs import output_format
-from .transforms import BACKENDS
+from ..errors import StippleError
+from ..halftone import INITS
+from ..io.commit import output_format
+from ..io.png import check_png_canvas, default_png_width
+from ..plotter import physical_centres
+from ..transforms import BACKENDS
+from .options import common_options, palette_options, render_settings, resolve_input
+from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
 
 @click.command()
@@ -31,8 +24,6 @@ from .transforms import BACKENDS
 @click.pass_context
 def colour(ctx, image, **options):
     """Stipple a colour IMAGE with one layer of dots per ink (CSV x,y,layer; SVG one layer per pen)."""
-    from .cli import resolve_input
-
     started = time.perf_counter()
     image = resolve_input(ctx, image)
     if image is None:
@@ -42,10 +33,10 @@ def colour(ctx, image, **options):
 
 def run_colour(image, options, started):
     """Separate, optimise jointly and write one layer per ink (``stipple colour``, ``stipple torus --palette``)."""
-    from .colour import colour_problem, parse_palette
-    from .inputs import load_colour
-    from .outputs import layered_torus_output
-    from .torus import DEFAULT_EPSILON
+    from ..colour import colour_problem, parse_palette
+    from ..io.images import load_colour
+    from ..io.writers import layered_torus_output
+    from ..torus import DEFAULT_EPSILON
 
     try:
         check_colour_options(options)
@@ -101,8 +92,6 @@ def check_colour_options(options):
 
 def check_png(options, canvas):
     """Refuse, before the run, a PNG output too large to draw: the inks' picture holds about 33 bytes a pixel."""
-    from .outputs import check_png_canvas, default_png_width
-
     if ".png" in [output_format(path) for path in options["outputs"]]:
         check_png_canvas(canvas, options["png_width"] or default_png_width(options["n_points"]), layers=33)
 

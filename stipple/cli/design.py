@@ -1,25 +1,22 @@
-"""``stipple design``: numerical spherical designs of a given strength (registered in ``cli``)."""
+"""``stipple design``: numerical spherical designs of a given strength."""
 
 import time
 
 import click
 
-from .cli import (
+from ..drawing import PROJECTIONS
+from ..errors import StippleError
+from ..io.points import read_sphere_init
+from .options import (
     apply_options,
     config_option,
-    finish,
-    guarded_files,
     output_options,
     parse_view,
-    read_sphere_init,
     render_settings,
     run_options,
     session_options,
-    solve,
-    write_outputs,
 )
-from .errors import StippleError
-from .outputs import PROJECTIONS
+from .supervise import finish, guarded_files, solve, write_outputs
 
 
 def design_options(function):
@@ -65,9 +62,9 @@ def design_options(function):
 def design(ctx, **options):
     """A numerical spherical design of strength t: M points whose equal-weight rule integrates every spherical
     harmonic of degree 1..t to within --error (CSV in full precision)."""
-    from .design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
-    from .outputs import sphere_output
-    from .sphere import lon_lat
+    from ..design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
+    from ..io.writers import sphere_output
+    from ..sphere import lon_lat
 
     started = time.perf_counter()
     try:

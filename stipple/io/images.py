@@ -1,55 +1,21 @@
-"""Reading images and numeric maps into densities ``w >= 0`` (dark = many dots)."""
+"""Reading images and numeric maps into densities ``w >= 0`` (dark = many dots), and colour images into RGB."""
 
 import io
 import math
-import os
-import stat
+import sys
 import warnings
 
 import numpy as np
 from PIL import Image, ImageOps, UnidentifiedImageError
 
-from .errors import StippleError
+from ..errors import StippleError
+from .sources import read_source
 
 NPY_MAGIC = b"\x93NUMPY"
-MAX_INPUT_BYTES = 1 << 30
 MAX_NPY_HEADER = 10_000
 # Rec. 601 luma in thousandths: integer sums keep white exactly white (0.299 + 0.587 + 0.114 != 1 in floats).
 _LUMA = np.array([299, 587, 114])
 _FLOAT_SCALES = (1.0, 255.0, 65535.0)
-
-
-def read_source(source, limit=None):
-    """Bytes of ``source`` (a path, or a binary file object such as stdin), at most ``limit`` of them
-    (default ``MAX_INPUT_BYTES``).
-
-    Raises
-    ------
-    StippleError
-        If the source cannot be read or holds more than ``limit`` bytes (``/dev/zero`` never ends).
-    """
-    name = str(getattr(source, "name", source))
-    limit = MAX_INPUT_BYTES if limit is None else limit
-    try:
-        if hasattr(source, "read"):
-            return _read_bounded(source, limit, name)
-        with open(source, "rb") as handle:
-            return _read_bounded(handle, limit, name)
-    except OSError as error:
-        raise StippleError(f"cannot read {name}: {error.strerror or error}") from None
-
-
-def _read_bounded(stream, limit, name):
-    try:
-        status = os.fstat(stream.fileno())
-    except (OSError, ValueError, AttributeError):
-        status = None
-    if status is not None and stat.S_ISREG(status.st_mode) and status.st_size > limit:
-        raise StippleError(f"{name}: file is {status.st_size} bytes, more than the {limit} bytes read at most")
-    data = stream.read(limit + 1)
-    if len(data) > limit:
-        raise StippleError(f"{name}: input is longer than the {limit} bytes read at most")
-    return data
 
 
 def load_gray(data, name="input"):
@@ -229,39 +195,6 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
     return density**gamma if gamma != 1.0 else density
 
 
-def read_points_csv(source, names):
-    """Columns ``names`` of a CSV with a header row (as written by stipple) as an ``(M, len(names))`` array.
-
-    UTF-8 text (a byte-order mark is skipped); values must be finite numbers.
-    """
-    name = str(getattr(source, "name", source))
-    try:
-        text = read_source(source).decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise StippleError(f"{name}: points file is not UTF-8 text") from None
-    lines = [line.strip() for line in text.splitlines() if line.strip()]
-    if not lines:
-        raise StippleError(f"{name}: empty points file")
-    header = [column.strip().lower() for column in lines[0].split(",")]
-    missing = [column for column in names if column not in header]
-    if missing:
-        raise StippleError(f"{name}: expected CSV columns {','.join(names)}, got {lines[0]!r}")
-    indices = [header.index(column) for column in names]
-    rows = []
-    for number, line in enumerate(lines[1:], start=2):
-        try:
-            cells = line.split(",")
-            rows.append([float(cells[i]) for i in indices])
-        except (ValueError, IndexError):
-            raise StippleError(f"{name}: malformed CSV row {number}: {line[:80]!r}") from None
-    points = np.array(rows, dtype=np.float64).reshape(-1, len(names))
-    if len(points) == 0:
-        raise StippleError(f"{name}: no points")
-    if not np.all(np.isfinite(points)):
-        raise StippleError(f"{name}: points contain NaN or infinite values")
-    return points
-
-
 def load_colour(source, name=None):
     """Red, green and blue in [0, 1] of an image file, ``(H, W, 3)``, alpha composited on white paper.
 
@@ -279,3 +212,12 @@ def load_colour(source, name=None):
     colour = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
     check_grid(colour[..., 0], name)
     return colour
+
+
+def load_input(source, **options):
+    """``load_density`` of a path, or of stdin when ``source`` is ``-``."""
+    if source == "-":
+        stream = io.BytesIO(read_source(sys.stdin.buffer))
+        stream.name = "<stdin>"
+        return load_density(stream, **options)
+    return load_density(source, **options)

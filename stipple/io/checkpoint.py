@@ -16,9 +16,10 @@ from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
-from .errors import StippleError
-from .optimize import CGState
-from .outputs import atomic_write
+from ..errors import StippleError
+from ..optimize import CGState
+from .commit import atomic_write
+from .images import load_array
 
 FORMAT = "stipple-checkpoint"
 VERSION = 1
@@ -146,8 +147,6 @@ class _MemberReader:
             return stream.read(limit + 1)
 
     def value(self, name, limit, shape, kinds):
-        from .inputs import load_array
-
         data = self.raw(name, limit)
         try:
             array = load_array(data, name, kinds=kinds)

@@ -1,0 +1,79 @@
+"""``stipple line``: an image drawn as one closed line."""
+
+import time
+
+import click
+
+from ..errors import StippleError
+from ..io.images import load_input
+from ..io.points import read_torus_init
+from ..io.units import parse_length
+from ..line import LINE_ITERATIONS
+from .options import common_options, is_default, resolve_input
+from .supervise import finish, guarded_files, supervised, write_outputs
+
+
+@click.command()
+@click.argument("image", required=False)
+@common_options(iterations=LINE_ITERATIONS, settle=False)
+@click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.75 sqrt(M W H)).")
+@click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
+@click.pass_context
+def line(ctx, image, **options):
+    """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
+    from ..io.writers import line_output
+    from ..line import line_points
+
+    started = time.perf_counter()
+    image = resolve_input(ctx, image)
+    if image is None:
+        raise click.UsageError("missing IMAGE (or 'input' in --config)")
+    try:
+        width = parse_length(options["width"])
+        # The line's own default stroke is one input pixel, unless --pen-width is given.
+        pen_width = None if is_default(ctx, "pen_width") else parse_length(options["pen_width"], "pen-width")
+        inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
+        with guarded_files(inputs, options["outputs"], options["checkpoint"]):
+            weights = load_input(
+                image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+            )
+            init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
+            result, stopped_by = solve_line(weights, options, init)
+            points = line_points(result.points)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: line_output(
+                    points, weights.shape, fmt, width=width, pen_width=pen_width, png_width=options["png_width"]
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)
+
+
+def solve_line(weights, options, init):
+    """``draw_line`` with the CLI's stopping, checkpoint, progress and signal options."""
+    from ..line import draw_line
+    from ..torus import DEFAULT_EPSILON
+
+    result, stopped_by = supervised(
+        options,
+        lambda keywords: draw_line(
+            weights,
+            options["n_points"],
+            options["length"],
+            options["bandwidth"],
+            init=init,
+            threads=options["threads"],
+            epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+            **keywords,
+        ),
+    )
+    if options["verbose"] and not options["quiet"]:
+        segments = result.segment_lengths
+        click.echo(
+            f"stipple: line N={result.bandwidth}, length {segments.sum():.1f} px, penalty {result.penalty:g}, "
+            f"max/mean segment {segments.max() / segments.mean():.4f}",
+            err=True,
+        )
+    return result, stopped_by

@@ -1,0 +1,269 @@
+"""Option groups shared by the commands, and the conversions of their values (lengths, colours, views)."""
+
+import click
+import numpy as np
+
+from ..errors import StippleError
+from ..halftone import DEFAULT_SETTLE, INITS
+from ..io.units import BLACK, WHITE, parse_colour, parse_length
+from ..optimize import BETAS, SETTLE_WINDOW
+from ..plotter import DOT_STYLES
+from .config import load_config
+
+
+def resolve_input(ctx, given):
+    """The IMAGE/MAP argument, or ``input`` from the config file."""
+    return given if given is not None else (ctx.default_map or {}).get("input")
+
+
+def config_option():
+    return click.option(
+        "--config",
+        type=click.Path(dir_okay=False),
+        callback=load_config,
+        is_eager=True,
+        expose_value=False,
+        help="TOML file of option values (command-line options win).",
+    )
+
+
+def run_options(iterations=2000):
+    """Stopping, reproducibility and speed: shared by every optimising command."""
+    return [
+        click.option(
+            "--iterations",
+            type=click.IntRange(min=0),
+            default=iterations,
+            show_default=True,
+            help="Maximum total number of CG iterations.",
+        ),
+        click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
+        click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
+        click.option(
+            "--threads",
+            type=int,
+            default=None,
+            help="Transform threads (default: all CPUs; the same thread count gives the same points).",
+        ),
+        click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+        click.option(
+            "--beta",
+            type=click.Choice(BETAS),
+            default="hestenes-stiefel",
+            show_default=True,
+            help="CG direction rule: Hestenes-Stiefel (one Jacobian transform per iteration) or the paper's "
+            "Daniel (two).",
+        ),
+    ]
+
+
+def output_options():
+    """Output files and the drawing of dots."""
+    return [
+        click.option(
+            "-o",
+            "--output",
+            "outputs",
+            multiple=True,
+            default=("-",),
+            show_default=True,
+            help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
+        ),
+        click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
+        click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
+        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
+        click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
+        look_options,
+    ]
+
+
+def session_options():
+    """Checkpoints and what is reported."""
+    return [
+        click.option(
+            "--checkpoint",
+            type=click.Path(dir_okay=False),
+            default=None,
+            help="Save the optimiser state here (atomically) during and after the run.",
+        ),
+        click.option(
+            "--checkpoint-every",
+            default="60s",
+            show_default=True,
+            help="Checkpoint interval: seconds (60s, 5m) or iterations (100).",
+        ),
+        click.option("--resume", is_flag=True, help="Continue the run saved in --checkpoint."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary."),
+        click.option("-v", "--verbose", is_flag=True, help="Also report the settings chosen."),
+    ]
+
+
+def apply_options(function, options):
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def common_options(function=None, *, iterations=2000, settle=True):
+    """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
+    the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap;
+    ``settle=False`` leaves out ``--settle`` (for commands whose runs stop otherwise)."""
+    if function is None:
+        return lambda function: common_options(function, iterations=iterations, settle=settle)
+    problem = [
+        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
+        click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
+        click.option(
+            "--tol",
+            type=float,
+            default=1e-4,
+            show_default=True,
+            help="Stop when the gradient norm falls to this fraction of the initial one (for the torus's stratified "
+            "start: of the one at i.i.d. density samples).",
+        ),
+        click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
+        click.option(
+            "--near-field/--no-near-field",
+            default=None,
+            help="Sum the kernel's short range over neighbouring pairs: the untruncated discrepancy, no clumps "
+            "(default; sphere: with the distance kernel). --no-near-field: the paper's bandlimited E_N.",
+        ),
+        click.option(
+            "--invert",
+            is_flag=True,
+            help="Dots on the light parts (images: w = u; maps: w = 1 - map), drawn white on black.",
+        ),
+        click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
+        click.option(
+            "--range",
+            "value_range",
+            type=(float, float),
+            default=None,
+            help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
+        ),
+    ]
+    if settle:
+        problem.append(
+            click.option(
+                "--settle",
+                type=click.FloatRange(min=0),
+                default=None,
+                help=f"Also stop when the last {SETTLE_WINDOW} iterations lowered the energy by less than this "
+                f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus, else never; README, Defaults).",
+            )
+        )
+    runs = run_options(iterations)
+    return apply_options(function, [config_option()] + problem + runs + output_options() + session_options())
+
+
+def look_options(function):
+    """Options of the drawing (SVG and PNG) shared by every command that draws dots."""
+    options = [
+        click.option(
+            "--background",
+            default=None,
+            help="Paper colour of SVG/PNG: #rrggbb, #rgb or a name (default white; black with --invert).",
+        ),
+        click.option(
+            "--color",
+            default=None,
+            help="Dot colour of SVG/PNG (default black; white with --invert).",
+        ),
+        click.option(
+            "--dot-style",
+            type=click.Choice(("disc",) + DOT_STYLES),
+            default="disc",
+            show_default=True,
+            help="SVG/PNG dots: filled discs, or pen paths (outline, spiral fill, point) for plotters; the PNG then "
+            "previews the pen strokes.",
+        ),
+        click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width of the pen styles."),
+    ]
+    for option in reversed(options):
+        function = option(function)
+    return function
+
+
+def palette_options(default):
+    """``--palette``, ``--black`` and ``--union-weight``: colour separation into one class of dots per ink."""
+
+    def decorate(function):
+        options = [
+            click.option(
+                "--palette",
+                "--separation",
+                "palette",
+                default=default,
+                show_default=default is not None,
+                help="Inks: cmyk, cmy, gray (one black ink), or pen colours '#00a0e0,#e0007a,#ffe000,#000000' "
+                "(separated by non-negative least squares; README). One layer of dots per ink, optimised jointly.",
+            ),
+            click.option(
+                "--black",
+                type=click.FloatRange(0, 1),
+                default=1.0,
+                show_default=True,
+                help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",
+            ),
+            click.option(
+                "--union-weight",
+                type=float,
+                default=1.0,
+                show_default=True,
+                help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",
+            ),
+        ]
+        for option in reversed(options):
+            function = option(function)
+        return function
+
+    return decorate
+
+
+def render_settings(options):
+    """The drawing settings of the command's options: lengths parsed, colours resolved (``--invert``: white dots
+    on black unless ``--background`` / ``--color`` say otherwise)."""
+    invert = bool(options.get("invert"))
+    background, color = options.get("background"), options.get("color")
+    return {
+        "width": parse_length(options["width"], "width"),
+        "dot_radius": None if options["dot_radius"] is None else parse_length(options["dot_radius"], "dot-radius"),
+        "png_width": options["png_width"],
+        "background": parse_colour(background, "background") if background else (BLACK if invert else WHITE),
+        "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
+        "dot_style": options["dot_style"],
+        "pen_width": parse_length(options["pen_width"], "pen-width"),
+    }
+
+
+def is_default(ctx, name):
+    """Whether option ``name`` kept its default (not given on the command line, in the environment or a config)."""
+    return ctx.get_parameter_source(name) is click.core.ParameterSource.DEFAULT
+
+
+def check_longitude(name, value):
+    """A finite longitude in [-360, 360] degrees."""
+    if not -360 <= value <= 360:
+        raise StippleError(f"{name} must be a longitude in [-360, 360] degrees, not {value!r}")
+    return float(value)
+
+
+def init_input(init):
+    """The ``--init`` value as an input file role, or None for ``density`` / ``uniform``."""
+    return None if init in INITS else ("--init file", init)
+
+
+def parse_view(text):
+    try:
+        lon, lat = (float(part) for part in text.split(","))
+    except ValueError:
+        raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
+    if not (-90 <= lat <= 90 and np.isfinite(lon)):
+        raise StippleError(f"view must be a finite longitude and a latitude in [-90, 90], not {text!r}")
+    return lon, lat
+
+
+def check_extension(option, path, extension):
+    """Refuse a report file whose name does not end in ``extension`` (``-`` is stdout)."""
+    if path not in (None, "-") and not str(path).lower().endswith(extension):
+        raise StippleError(f"{path}: {option} writes {extension} files; the name must end in {extension}")

@@ -1,0 +1,72 @@
+"""``stipple render``: saved points drawn again (SVG, PNG, CSV, GeoJSON) without rerunning the optimiser."""
+
+import click
+import numpy as np
+
+from ..drawing import PROJECTIONS, sphere_canvas
+from ..errors import StippleError
+from ..io.commit import output_format
+from ..io.png import check_png_outputs
+from ..io.points import read_points, torus_canvas
+from ..plotter import physical_centres
+from .options import look_options, parse_view, render_settings
+from .supervise import guarded_files, plot_order, write_outputs
+
+
+@click.command()
+@click.argument("points_source", metavar="POINTS")
+@click.option(
+    "-o",
+    "--output",
+    "outputs",
+    multiple=True,
+    default=("-",),
+    show_default=True,
+    help="Output (.csv .svg .png .geojson); repeatable; '-' is CSV on stdout.",
+)
+@click.option("--like", default=None, help="Torus: the input image, for its size and mean tone.")
+@click.option("--size", default=None, help="Torus: WIDTH,HEIGHT of the input in pixels (default: from the points).")
+@click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px).")
+@click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm.")
+@click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels.")
+@click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters).")
+@click.option(
+    "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="Sphere CSV columns."
+)
+@click.option(
+    "--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True, help="Sphere PNG view."
+)
+@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
+@click.option("--invert", is_flag=True, help="Draw white dots on black.")
+@look_options
+@click.option("-q", "--quiet", is_flag=True, help="No log lines.")
+def render(points_source, outputs, like, size, coords, projection, view, **options):
+    """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
+    from ..io.writers import sphere_output, torus_output
+    from ..sphere import lon_lat
+
+    png_width = options["png_width"]
+    try:
+        settings = render_settings(options)
+        angles = parse_view(view)
+        formats = [output_format(path) for path in outputs]
+        with guarded_files([("points", points_source), ("--like image", like)], outputs):
+            domain, points = read_points(points_source)
+            if domain == "sphere":
+                check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
+                points = plot_order(points, points, options, "radians")
+                degrees = lon_lat(points)
+                write_outputs(
+                    outputs,
+                    lambda fmt: sphere_output(
+                        points, degrees, fmt, coords=coords, projection=projection, view=angles, **settings
+                    ),
+                )
+                return
+            shape, ink, points = torus_canvas(points, like, size)
+            check_png_outputs(formats, shape[::-1], png_width, len(points))
+            unit = points / np.array([shape[1], shape[0]])
+            unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
+            write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, ink=ink, **settings))
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None

@@ -1,0 +1,104 @@
+"""``stipple sphere``: a map's points on the sphere (or, with --uniform, well-spread points and designs)."""
+
+import time
+
+import click
+
+from ..drawing import PROJECTIONS, sphere_canvas
+from ..errors import StippleError
+from ..io.commit import output_format
+from ..io.png import check_png_outputs
+from ..io.points import read_sphere_init
+from .options import check_longitude, common_options, init_input, is_default, parse_view, render_settings, resolve_input
+from .supervise import finish, guarded_files, plot_order, solve, write_outputs
+
+
+@click.command()
+@click.argument("map_source", metavar="MAP", required=False)
+@common_options
+@click.option("--uniform", is_flag=True, help="w ≡ 1 (numerical spherical designs); no MAP.")
+@click.option(
+    "--lon0",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Longitude (degrees east) where the map's first column starts (-180 for maps centred on 0°).",
+)
+@click.option(
+    "--kernel",
+    default=None,
+    help="'distance' (the paper's; default for maps), 'distance+design:T' (default for --uniform: T = 0.96 sqrt(2M)) "
+    "or 'sobolev:S'.",
+)
+@click.option(
+    "--init",
+    default="density",
+    show_default=True,
+    help="Start: 'density', 'uniform', or a CSV of lon,lat (degrees) or x,y,z.",
+)
+@click.option(
+    "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="CSV columns."
+)
+@click.option(
+    "--projection",
+    type=click.Choice(PROJECTIONS),
+    default="ortho",
+    show_default=True,
+    help="PNG view: orthographic globe or equirectangular map.",
+)
+@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees).")
+@click.pass_context
+def sphere(ctx, map_source, **options):
+    """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
+    'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
+    from ..io.writers import sphere_output
+    from ..sphere import DESIGN_TOL, lon_lat, sphere_density, sphere_problem
+
+    started = time.perf_counter()
+    map_source = resolve_input(ctx, map_source)
+    try:
+        settings = render_settings(options)
+        view = parse_view(options["view"])
+        lon0 = check_longitude("lon0", options["lon0"])
+        formats = [output_format(path) for path in options["outputs"]]
+        check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
+        inputs = [("map", map_source), init_input(options["init"])]
+        with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
+            density = sphere_density(
+                map_source,
+                uniform=options["uniform"],
+                invert=options["invert"],
+                gamma=options["gamma"],
+                value_range=options["value_range"],
+                lon0=lon0,
+            )
+            problem = sphere_problem(
+                density,
+                options["n_points"],
+                options["bandwidth"],
+                kernel=options["kernel"],
+                threads=options["threads"],
+                epsilon=options["epsilon"],
+                near_field=options["near_field"],
+            )
+            if problem.settings["kernel"].startswith("distance+design") and is_default(ctx, "tol"):
+                options["tol"] = DESIGN_TOL
+            result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
+            points = plot_order(result.points, result.points, options, "radians")
+            degrees = lon_lat(points)
+            write_outputs(
+                options["outputs"],
+                lambda fmt: sphere_output(
+                    points,
+                    degrees,
+                    fmt,
+                    coords=options["coords"],
+                    projection=options["projection"],
+                    view=view,
+                    ink=density.mean,
+                    **settings,
+                ),
+            )
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)

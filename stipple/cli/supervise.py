@@ -1,0 +1,245 @@
+"""Running a command's optimisation under supervision: the progress bar, SIGINT / SIGTERM, the files guarded
+before any work, the outputs committed all-or-nothing, and the summary and exit status at the end."""
+
+import contextlib
+import re
+import shlex
+import signal
+import sys
+import time
+
+import click
+import numpy as np
+
+from ..errors import StippleError
+from ..halftone import check_integer, run
+from ..io.commit import check_writable, commit_outputs, output_format
+from ..io.safety import CheckpointLock, check_distinct
+from ..plotter import plotter_order
+
+
+class Progress:
+    """A tqdm bar on stderr (energy, relative gradient norm, speed); off when quiet or stderr is not a TTY."""
+
+    def __init__(self, total, enabled):
+        self.total = total
+        self.enabled = enabled
+        self.bar = None
+
+    def __call__(self, state):
+        if not self.enabled:
+            return False
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=self.total, initial=state.iteration, unit="it", file=sys.stderr, dynamic_ncols=True)
+        self.bar.update(state.iteration - self.bar.n)
+        self.bar.set_postfix_str(f"E={state.energy:.4e} |g|/|g0|={state.relative_gradient_norm:.2e}", refresh=False)
+        return False
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+class Interrupted(BaseException):
+    """Raised by the signal handler outside the optimiser (and on a second signal): unwinds every cleanup."""
+
+    def __init__(self, number):
+        super().__init__(number)
+        self.number = number
+
+
+class SignalGuard:
+    """SIGINT / SIGTERM for the whole command.
+
+    While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
+    iteration, so that the checkpoint and the outputs reached so far are written; any other signal
+    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143);
+    signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short.
+    """
+
+    def __init__(self):
+        self.signal = None
+        self.deferring = False
+        self.unwinding = False
+        self._previous = {}
+
+    def __enter__(self):
+        self.signal, self.deferring, self.unwinding = None, False, False
+        for number in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._previous[number] = signal.signal(number, self._handle)
+            except ValueError:  # not the main thread: leave signals alone
+                break
+        return self
+
+    def __exit__(self, *exc):
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
+        self._previous.clear()
+
+    def _handle(self, number, frame):
+        if self.deferring and self.signal is None:
+            self.signal = number
+            return
+        if self.unwinding:  # already on the way out: let the cleanup finish
+            return
+        self.unwinding = True
+        raise Interrupted(number)
+
+    @contextlib.contextmanager
+    def deferred(self):
+        """Within the block a first signal is only recorded (see ``stop_requested``)."""
+        self.deferring = True
+        try:
+            yield self
+        finally:
+            self.deferring = False
+
+    def stop_requested(self, state):
+        return self.signal is not None
+
+
+SIGNALS = SignalGuard()
+
+
+def parse_every(text):
+    """``"60s"``, ``"5m"`` (seconds) or ``"100"`` / ``"100it"`` (iterations) -> (seconds, iterations)."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m|h|it)?\s*", str(text))
+    if not match or float(match.group(1)) <= 0:
+        raise StippleError(f"checkpoint-every must be like 60s, 5m or 100 (iterations), not {text!r}")
+    value, unit = float(match.group(1)), match.group(2) or "it"
+    if unit == "it":
+        if value != int(value):
+            raise StippleError(f"checkpoint-every must be a whole number of iterations, not {text!r}")
+        return None, int(value)
+    return value * {"s": 1, "m": 60, "h": 3600}[unit], None
+
+
+@contextlib.contextmanager
+def guarded_files(inputs, outputs, checkpoint=None, reports=()):
+    """Check every file of a run before any work, then hold the checkpoint's lock for the whole run.
+
+    ``inputs`` and ``reports`` are ``(role, path)`` pairs (files read; extra files written). Outputs'
+    formats and directories are checked, no output may name an input, the checkpoint or another
+    output, and ``-`` (stdout) may be given once.
+    """
+    for path in outputs:
+        output_format(path)
+        check_writable(path)
+    for _, path in reports:
+        check_writable(path)
+    if list(outputs).count("-") > 1:
+        raise StippleError("'-' (stdout) may be given only once")
+    config = click.get_current_context().meta.get("stipple.config")
+    inputs = [*inputs, ("config", config)]
+    written = [("output", path) for path in outputs] + list(reports) + [("checkpoint", checkpoint)]
+    check_distinct(inputs, written)
+    if checkpoint is None:
+        yield
+        return
+    check_writable(checkpoint)
+    with CheckpointLock(checkpoint):
+        yield
+
+
+def write_outputs(paths, render):
+    """Render every output in memory, then write them all-or-nothing (``-`` is stdout)."""
+    commit_outputs([(path, render(output_format(path))) for path in paths])
+
+
+def solve(problem, options, init, stop=None):
+    """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options (and ``stop``, a callback
+    that ends the run by returning True)."""
+    verbose = options["verbose"] and not options["quiet"]
+
+    def announce():
+        fourier = problem.discrepancy.fourier
+        transforms = getattr(fourier, "nufft", fourier)
+        details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
+        click.echo(
+            f"stipple: {details}, threads={transforms.threads}, epsilon={transforms.epsilon:g}, "
+            f"tol={options['tol']:g}, iterations<={options['iterations']}",
+            err=True,
+        )
+
+    result, stopped_by = supervised(
+        options,
+        lambda keywords: run(
+            problem,
+            init=init,
+            safeguard=options["safeguard"],
+            correct=options.get("correct", False),
+            settle=options.get("settle"),
+            **keywords,
+        ),
+        stop,
+        announce if verbose else None,
+    )
+    if verbose and len(result.energies) > 1:
+        rises = int(np.sum(np.diff(result.energies) > 0))
+        click.echo(
+            f"stipple: {result.seconds / max(result.iterations, 1) * 1000:.1f} ms per iteration, "
+            f"energy {result.energies[0]:.4e} -> {result.energy:.4e} ({rises} rises)",
+            err=True,
+        )
+    return result, stopped_by
+
+
+def supervised(options, launch, stop=None, announce=None):
+    """``launch(keywords)`` under the CLI's progress bar and signal handling, where ``keywords`` are the stopping,
+    seed, callback and checkpoint arguments that ``halftone.run`` and ``draw_line`` share. The callback also ends
+    the run when ``stop`` returns True, and ``announce()`` reports the settings between the checks of the
+    checkpoint interval and of the seed. Returns the result and the signal that stopped it (or None)."""
+    seconds, iterations = parse_every(options["checkpoint_every"])
+    if announce is not None:
+        announce()
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
+    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
+    with SIGNALS.deferred() as interruption:
+        try:
+            result = launch(
+                {
+                    "seed": options["seed"],
+                    "tol": options["tol"],
+                    "iterations": options["iterations"],
+                    "time_limit": options["time_limit"],
+                    "callback": lambda state: any(
+                        [progress(state), interruption.stop_requested(state), bool(stop and stop(state))]
+                    ),
+                    "checkpoint": options["checkpoint"],
+                    "checkpoint_seconds": seconds,
+                    "checkpoint_iterations": iterations,
+                    "resume": options["resume"],
+                    "beta": options["beta"],
+                }
+            )
+        finally:
+            progress.close()
+    return result, interruption.signal
+
+
+def finish(result, stopped_by, options, started):
+    """Summary on stderr, and the exit code after a signal (130 / 143) with how to resume."""
+    if stopped_by is not None:
+        name = signal.Signals(stopped_by).name
+        if options["checkpoint"]:
+            command = shlex.join(["stipple"] + sys.argv[1:] + ([] if options["resume"] else ["--resume"]))
+            hint = f"resume with: {command}"
+        else:
+            hint = "no --checkpoint was given, so the run cannot be resumed"
+        click.echo(f"stipple: stopped by {name} at iteration {result.iterations}; outputs written; {hint}", err=True)
+        sys.exit(128 + stopped_by)
+    if not options["quiet"]:
+        click.echo(f"stipple: {result.message}; E={result.energy:.6e}; {time.perf_counter() - started:.1f} s", err=True)
+
+
+def plot_order(centres, points, options, unit):
+    """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
+    if not options.get("order"):
+        return points
+    order, before, after = plotter_order(centres)
+    if not options.get("quiet"):
+        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {unit}", err=True)
+    return points[order]

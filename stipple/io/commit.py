@@ -1,0 +1,158 @@
+"""The all-or-nothing commit of output files: every temporary file written and fsynced, then all renamed; and the
+checks made on output paths before a long run."""
+
+import contextlib
+import os
+import signal
+import sys
+import tempfile
+
+from ..errors import StippleError
+
+FORMATS = (".csv", ".svg", ".png", ".geojson", ".json")
+
+
+def output_format(path):
+    """The format of ``path`` by its extension (``-`` is CSV on stdout)."""
+    if str(path) == "-":
+        return ".csv"
+    extension = os.path.splitext(str(path))[1].lower()
+    if extension not in FORMATS:
+        raise StippleError(f"{path}: unknown output format {extension or '(none)'}; use one of {', '.join(FORMATS)}")
+    return extension
+
+
+def check_writable(path):
+    """Raise if the directory of ``path`` cannot take a new file (checked before a long run)."""
+    if str(path) == "-":
+        if sys.stdout is None:
+            raise StippleError("cannot write to stdout: it is closed")
+        return
+    directory = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(directory):
+        raise StippleError(f"{path}: directory {directory} does not exist")
+    if os.path.isdir(path):
+        raise StippleError(f"{path}: is a directory")
+    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
+        raise StippleError(f"{path}: is read-only; make it writable or choose another name")
+    try:
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as error:
+        raise StippleError(f"{path}: not writable ({error.strerror})") from None
+
+
+def atomic_write(path, data):
+    """Write ``data`` (bytes) to ``path`` so that readers see the old file or the whole new one."""
+    commit_outputs([(path, data)])
+
+
+def commit_outputs(items):
+    """Write every ``(path, bytes)`` of ``items`` all-or-nothing (``-`` is stdout).
+
+    Each file is first written to a temporary file beside it (flushed and fsynced); only when all of
+    them are written (and stdout has taken its share) are they renamed over their targets, with SIGINT
+    and SIGTERM held back during the renames. Any failure or signal before that removes every temporary
+    file and leaves every existing output as it was.
+    """
+    temporaries = []
+    try:
+        for path, data in items:
+            if str(path) != "-":
+                temporaries.append((_write_temporary(path, data), path))
+        for path, data in items:
+            if str(path) == "-":
+                write_stdout(data)
+        with _signals_held():
+            while temporaries:
+                temporary, path = temporaries[0]
+                try:
+                    os.replace(temporary, path)
+                except OSError as error:
+                    raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+                temporaries.pop(0)
+    finally:
+        for temporary, _ in temporaries:
+            _remove(temporary)
+
+
+def _write_temporary(path, data):
+    """A fsynced temporary file in the directory of ``path`` holding ``data``, with the mode ``path`` will get."""
+    directory = os.path.dirname(os.path.abspath(path))
+    try:
+        handle, temporary = tempfile.mkstemp(dir=directory, prefix=".stipple-", suffix=".tmp")
+    except OSError as error:
+        raise StippleError(f"{path}: cannot write ({error.strerror})") from None
+    try:
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(data)
+            stream.flush()
+            os.fsync(stream.fileno())
+        mode = os.stat(path).st_mode & 0o777 if os.path.exists(path) else 0o666 & ~_umask()
+        os.chmod(temporary, mode)
+    except BaseException as error:
+        _remove(temporary)
+        if isinstance(error, OSError):
+            raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+        raise
+    return temporary
+
+
+def _remove(path):
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM received in the block are delivered after it (main thread only; else a no-op).
+
+    The Python-level handlers are swapped for a recorder, which works whichever thread the kernel
+    picks for the signal; recorded signals are raised again once the previous handlers are back.
+    """
+    caught = []
+    previous = {}
+    try:
+        for number in (signal.SIGINT, signal.SIGTERM):
+            previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
+    except ValueError:  # not the main thread: signals cannot be handled here anyway
+        pass
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+        for number in dict.fromkeys(caught):
+            signal.raise_signal(number)
+
+
+def write_stdout(data):
+    """Write ``data`` (bytes) to stdout; a closed or full stdout is a StippleError, not a traceback."""
+    stream = sys.stdout
+    if stream is None:
+        raise StippleError("cannot write to stdout: it is closed")
+    try:
+        stream.flush()
+        stream.buffer.write(data)
+        stream.buffer.flush()
+    except (OSError, ValueError) as error:
+        _discard_stdout()
+        raise StippleError(f"cannot write to stdout ({getattr(error, 'strerror', None) or error})") from None
+
+
+def _discard_stdout():
+    """Point stdout at /dev/null so that the interpreter's final flush cannot fail a second time."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

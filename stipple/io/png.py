@@ -1,0 +1,152 @@
+"""PNG pictures: dots and lines drawn antialiased (4× supersampled, box-filtered), and the spectrum plot."""
+
+import io
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from .. import allocator
+from ..drawing import ellipse_polygon
+from ..errors import StippleError
+from .units import WHITE
+
+SUPERSAMPLE = 4
+MAX_CANVAS_SIDE = 1 << 20
+
+
+def png_canvas(size, pixels_wide):
+    """Scale and ``(width, height)`` of the supersampled canvas for a PNG ``pixels_wide`` wide of ``size``."""
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    return scale, (int(round(width * scale)), int(round(height * scale)))
+
+
+def check_png_canvas(size, pixels_wide, layers=2):
+    """Refuse a PNG whose drawing canvas is too large for a side limit or for the memory available.
+
+    ``layers`` counts the canvas-sized images alive at once (the canvas and a background).
+    """
+    _, (columns, rows) = png_canvas(size, pixels_wide)
+    picture = f"a PNG {pixels_wide} pixels wide of a {size[0]:g}×{size[1]:g} canvas"
+    if max(columns, rows) > MAX_CANVAS_SIDE:
+        raise StippleError(
+            f"{picture} would be {columns // SUPERSAMPLE}×{rows // SUPERSAMPLE} pixels, more than "
+            f"{MAX_CANVAS_SIDE // SUPERSAMPLE} per side: use a smaller --png-width, or SVG"
+        )
+    if min(columns, rows) < SUPERSAMPLE:
+        raise StippleError(f"{picture} would be less than one pixel high or wide: use a larger --png-width, or SVG")
+    needed, available = columns * rows * layers * 1.1, allocator.available_memory()
+    if needed > available:
+        raise StippleError(
+            f"{picture} needs about {needed / 2**30:.1f} GiB of memory to draw, more than the "
+            f"{available / 2**30:.1f} GiB available: use a smaller --png-width, or SVG"
+        )
+
+
+def png_bytes(image):
+    buffer = io.BytesIO()
+    image.save(buffer, format="PNG", optimize=False)
+    return buffer.getvalue()
+
+
+def default_png_width(count):
+    return int(max(1024, 8 * round(np.sqrt(count) / 2)))
+
+
+def check_png_outputs(formats, canvas, png_width, count):
+    """Before a run: refuse PNG outputs whose canvas (user units ``(width, height)``) would not fit in memory."""
+    if ".png" in formats:
+        check_png_canvas(canvas, png_width or default_png_width(count))
+
+
+def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
+    """PNG bytes of two stacked line plots: log10 radially averaged power and anisotropy (dB) by frequency."""
+    width, height = size
+    image = Image.new("L", size, 255)
+    draw = ImageDraw.Draw(image)
+    with np.errstate(divide="ignore"):
+        log_power = np.log10(np.asarray(power, dtype=float))
+    panels = [
+        ("log10 radially averaged power", np.where(np.isfinite(log_power), log_power, np.nan)),
+        ("anisotropy (dB)", np.asarray([np.nan if a is None else a for a in anisotropy], dtype=float)),
+    ]
+    x = np.asarray(frequencies, dtype=float)
+    for index, (title, values) in enumerate(panels):
+        top = 20 + index * height // 2
+        box = (60, top + 20, width - 20, top + height // 2 - 40)
+        draw.rectangle(box, outline=0)
+        finite = values[np.isfinite(values)]
+        low, high = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+        high = high if high > low else low + 1
+        px = box[0] + (x - x.min()) / max(np.ptp(x), 1) * (box[2] - box[0])
+        py = box[3] - (values - low) / (high - low) * (box[3] - box[1])
+        keep = np.isfinite(py)
+        draw.line(list(zip(px[keep], py[keep], strict=True)), fill=0, width=1)
+        draw.text((box[0], top), f"{title}: {low:.3g} .. {high:.3g}", fill=0)
+        draw.text((box[0], box[3] + 4), f"frequency {x.min():g} .. {x.max():g}", fill=0)
+    return png_bytes(image)
+
+
+def render_line(pixels, size, pixels_wide, pen_width, closed=True):
+    """An antialiased grayscale image of a black polyline of ``pen_width`` (user units) on white.
+
+    ``pixels`` are the vertices in user units of a canvas of ``size = (width, height)``; drawn at 4× and reduced.
+    """
+    width, height = size
+    scale = pixels_wide / width * SUPERSAMPLE
+    canvas = Image.new("L", (int(round(width * scale)), int(round(height * scale))), 255)
+    vertices = np.asarray(pixels) * scale
+    if closed:
+        vertices = np.vstack([vertices, vertices[:1]])
+    stroke = max(int(round(pen_width * scale)), 1)
+    ImageDraw.Draw(canvas).line([tuple(v) for v in vertices], fill=0, width=stroke, joint="curve")
+    return canvas.reduce(SUPERSAMPLE)
+
+
+def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=None, blend="over", underlay=None):
+    """An antialiased PNG picture (``PIL.Image``) of ``Dots`` layers, drawn at 4× and box-filtered.
+
+    ``blend`` "over" paints each layer's colour over what is below (one ink on any background); "multiply"
+    prints inks on paper (overlapping cyan and yellow make green). ``underlay(draw, scale)`` may draw on a
+    coverage mask first (the globe's outline), which is painted 8 % of the way from the background to the
+    first layer's colour. The picture is grayscale when every colour is a gray.
+    """
+    check_png_canvas(size, pixels_wide)
+    scale, canvas_size = png_canvas(size, pixels_wide)
+    picture = np.empty((canvas_size[1], canvas_size[0], 3))
+    picture[:] = background
+    if underlay is not None and layers:
+        mask = Image.new("L", canvas_size, 0)
+        underlay(ImageDraw.Draw(mask), scale)
+        coverage = np.asarray(mask, dtype=np.float64)[..., None] / 255.0 * 0.08
+        picture += coverage * (np.asarray(layers[0].colour) - picture)
+    for dots in layers:
+        coverage = np.asarray(_coverage(dots, canvas_size, scale, pen_width), dtype=np.float64)[..., None] / 255.0
+        colour = np.asarray(dots.colour)
+        target = picture * colour if blend == "multiply" else colour
+        picture += coverage * (target - picture)
+    image = Image.fromarray(np.round(np.clip(picture, 0, 1) * 255).astype(np.uint8), "RGB")
+    if all(len(set(c)) == 1 for c in [tuple(background)] + [tuple(d.colour) for d in layers]):
+        image = image.convert("L")
+    return image.reduce(SUPERSAMPLE)
+
+
+def _coverage(dots, canvas_size, scale, pen_width):
+    """A mask (``PIL.Image`` "L") of the ink of one layer of dots on the supersampled canvas."""
+    mask = Image.new("L", canvas_size, 0)
+    draw = ImageDraw.Draw(mask)
+    if dots.paths is not None:
+        stroke = max(int(round(pen_width * scale)), 1)
+        for path in dots.paths:
+            draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
+    elif dots.squash is None:
+        for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 0.5), strict=True):
+            draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=255)
+    else:
+        for centre, radius, squash, angle in zip(
+            dots.centres * scale, dots.radii * scale, dots.squash, dots.angle, strict=True
+        ):
+            draw.polygon(
+                ellipse_polygon(centre, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
+            )
+    return mask

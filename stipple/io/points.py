@@ -1,0 +1,177 @@
+"""Point CSVs: writing ``x,y`` / ``lon,lat`` / ``x,y,z`` / ``x,y,layer`` tables, and reading them back (as
+``stipple render``, ``evaluate`` and ``--init`` do) with every value checked."""
+
+import io
+import sys
+
+import numpy as np
+
+from ..errors import StippleError
+from ..halftone import INITS, MAX_POINTS
+from ..sphere import from_lon_lat
+from .images import load_input
+from .sources import read_source
+
+MAX_PIXEL_COORDINATE = 2**31
+LABEL_COLUMNS = ("layer", "color", "colour")
+
+
+def csv_bytes(columns, names, number_format=".6f"):
+    """CSV with a header row; a fixed number format so that output is byte-stable (".17g" round-trips)."""
+    lines = [",".join(names)]
+    table = np.column_stack(columns)
+    lines.extend(",".join(format(value, number_format) for value in row) for row in table)
+    return ("\n".join(lines) + "\n").encode()
+
+
+def layered_csv_bytes(pixels, layer_names):
+    """CSV ``x,y,layer`` with one row per dot; ``layer_names`` holds each dot's layer name."""
+    lines = ["x,y,layer"]
+    lines.extend(f"{x:.6f},{y:.6f},{name}" for (x, y), name in zip(pixels, layer_names, strict=True))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def read_points_csv(source, names):
+    """Columns ``names`` of a CSV with a header row (as written by stipple) as an ``(M, len(names))`` array.
+
+    UTF-8 text (a byte-order mark is skipped); values must be finite numbers.
+    """
+    name = str(getattr(source, "name", source))
+    try:
+        text = read_source(source).decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise StippleError(f"{name}: points file is not UTF-8 text") from None
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    if not lines:
+        raise StippleError(f"{name}: empty points file")
+    header = [column.strip().lower() for column in lines[0].split(",")]
+    missing = [column for column in names if column not in header]
+    if missing:
+        raise StippleError(f"{name}: expected CSV columns {','.join(names)}, got {lines[0]!r}")
+    indices = [header.index(column) for column in names]
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        try:
+            cells = line.split(",")
+            rows.append([float(cells[i]) for i in indices])
+        except (ValueError, IndexError):
+            raise StippleError(f"{name}: malformed CSV row {number}: {line[:80]!r}") from None
+    points = np.array(rows, dtype=np.float64).reshape(-1, len(names))
+    if len(points) == 0:
+        raise StippleError(f"{name}: no points")
+    if not np.all(np.isfinite(points)):
+        raise StippleError(f"{name}: points contain NaN or infinite values")
+    return points
+
+
+def read_torus_init(init, shape):
+    """``stratified``/``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
+    if init in INITS:
+        return init
+    domain, pixels = read_points(init)
+    if domain != "torus":
+        raise StippleError(f"{init}: --init for the torus needs a CSV with columns x,y (pixels)")
+    rows, columns = shape
+    return np.mod(pixels / np.array([columns, rows]), 1.0)
+
+
+def read_sphere_init(init):
+    """``density``/``uniform``, or a CSV of ``lon,lat`` degrees or ``x,y,z`` as unit vectors."""
+    if init in INITS:
+        return init
+    domain, points = read_points(init)
+    if domain != "sphere":
+        raise StippleError(f"{init}: --init for the sphere needs a CSV with columns lon,lat or x,y,z")
+    return points
+
+
+def read_points(source, labels=False):
+    """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``.
+
+    The header decides: ``x,y,z`` and ``lon,lat`` are sphere points (latitudes in [-90, 90], no zero
+    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size). With
+    ``labels``, also each torus point's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes),
+    or None: ``(domain, points, names)``.
+    """
+    name = "<stdin>" if source == "-" else source
+    data = read_source(sys.stdin.buffer if source == "-" else source)
+    first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
+    columns = {column.strip().lower() for column in first_line.split(",")}
+
+    def table(names):
+        stream = io.BytesIO(data)
+        stream.name = name
+        points = read_points_csv(stream, names)
+        if len(points) > MAX_POINTS:
+            raise StippleError(f"{name}: {len(points)} points; at most {MAX_POINTS} are read")
+        return points
+
+    if {"x", "y", "z"} <= columns:
+        found = "sphere", unit_rows(table(("x", "y", "z")), name)
+        return (*found, None) if labels else found
+    if {"lon", "lat"} <= columns:
+        longitude, latitude = table(("lon", "lat")).T
+        if np.any(np.abs(latitude) > 90):
+            raise StippleError(f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(latitude).max():g}")
+        found = "sphere", from_lon_lat(longitude, latitude)
+        return (*found, None) if labels else found
+    if {"x", "y"} <= columns:
+        pixels = table(("x", "y"))
+        if np.abs(pixels).max() >= MAX_PIXEL_COORDINATE:
+            raise StippleError(
+                f"{name}: x,y must be pixel positions below {MAX_PIXEL_COORDINATE} in size, "
+                f"not {np.abs(pixels).max():g}"
+            )
+        if not labels:
+            return "torus", pixels
+        return "torus", pixels, read_labels(data, columns, len(pixels), name)
+    raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+
+
+def read_labels(data, columns, count, name):
+    """Each row's layer name from the ``layer`` / ``color`` column of CSV ``data``, or None without one."""
+    column = next((label for label in LABEL_COLUMNS if label in columns), None)
+    if column is None:
+        return None
+    lines = [line.strip() for line in data.decode("utf-8-sig").splitlines() if line.strip()]
+    index = [cell.strip().lower() for cell in lines[0].split(",")].index(column)
+    names = [line.split(",")[index].strip() for line in lines[1:]]
+    if len(names) != count or not all(names):
+        raise StippleError(f"{name}: every row needs a {column} name")
+    return np.array(names)
+
+
+def unit_rows(vectors, name):
+    """Rows scaled to unit length (safely for tiny and huge entries); zero rows are refused."""
+    largest = np.abs(vectors).max(axis=1, keepdims=True)
+    if np.any(largest == 0):
+        row = int(np.argmax(largest[:, 0] == 0)) + 1
+        raise StippleError(f"{name}: point {row} is the zero vector (0,0,0); x,y,z must be directions")
+    scaled = vectors / largest
+    return scaled / np.linalg.norm(scaled, axis=1, keepdims=True)
+
+
+def parse_size(text):
+    """``"W,H"`` or ``"WxH"`` pixels -> ``(H, W)``; each side from 1 to ``MAX_PIXEL_COORDINATE``."""
+    try:
+        width, height = (int(part) for part in text.lower().replace("x", ",").split(","))
+    except ValueError:
+        raise StippleError(f"size must be WIDTH,HEIGHT in pixels, not {text!r}") from None
+    if not (1 <= width < MAX_PIXEL_COORDINATE and 1 <= height < MAX_PIXEL_COORDINATE):
+        raise StippleError(f"size must be WIDTH,HEIGHT with each in [1, {MAX_PIXEL_COORDINATE - 1}], not {text!r}")
+    return height, width
+
+
+def torus_canvas(pixels, like, size):
+    """``(shape, ink, pixels)`` of torus points: the canvas of ``--like`` or ``--size`` with the points wrapped
+    onto it, or by default the smallest canvas from the origin that holds every point."""
+    if like is None and size is None:
+        shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
+        return (max(shape[0], 1), max(shape[1], 1)), None, pixels
+    ink = None
+    if like is not None:
+        weights = load_input(like)
+        shape, ink = weights.shape, weights.mean()
+    else:
+        shape = parse_size(size)
+    return shape, ink, np.mod(pixels, np.array([shape[1], shape[0]]))

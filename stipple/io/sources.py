@@ -1,0 +1,41 @@
+"""Bounded reads: the bytes of a path, a stream or stdin, never more than ``MAX_INPUT_BYTES``."""
+
+import os
+import stat
+
+from ..errors import StippleError
+
+MAX_INPUT_BYTES = 1 << 30
+
+
+def read_source(source, limit=None):
+    """Bytes of ``source`` (a path, or a binary file object such as stdin), at most ``limit`` of them
+    (default ``MAX_INPUT_BYTES``).
+
+    Raises
+    ------
+    StippleError
+        If the source cannot be read or holds more than ``limit`` bytes (``/dev/zero`` never ends).
+    """
+    name = str(getattr(source, "name", source))
+    limit = MAX_INPUT_BYTES if limit is None else limit
+    try:
+        if hasattr(source, "read"):
+            return _read_bounded(source, limit, name)
+        with open(source, "rb") as handle:
+            return _read_bounded(handle, limit, name)
+    except OSError as error:
+        raise StippleError(f"cannot read {name}: {error.strerror or error}") from None
+
+
+def _read_bounded(stream, limit, name):
+    try:
+        status = os.fstat(stream.fileno())
+    except (OSError, ValueError, AttributeError):
+        status = None
+    if status is not None and stat.S_ISREG(status.st_mode) and status.st_size > limit:
+        raise StippleError(f"{name}: file is {status.st_size} bytes, more than the {limit} bytes read at most")
+    data = stream.read(limit + 1)
+    if len(data) > limit:
+        raise StippleError(f"{name}: input is longer than the {limit} bytes read at most")
+    return data

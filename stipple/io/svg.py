@@ -1,0 +1,78 @@
+"""SVG documents: dots as circles, ellipses or pen paths, one Inkscape layer per ink; one-line drawings as a path."""
+
+import numpy as np
+
+from .units import WHITE, hex_colour
+
+
+def line_svg_bytes(pixels, size, physical_width, pen_width, comment=""):
+    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide, unfilled."""
+    width, height = size
+    value, unit = physical_width
+    points = " ".join(f"{x:.3f},{y:.3f}" for x, y in pixels)
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{value:g}{unit}" '
+            f'height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
+            f"<!-- {comment} -->" if comment else "",
+            f'<path fill="none" stroke="black" stroke-width="{pen_width:.4f}" stroke-linejoin="round" '
+            f'd="M {points} Z"/>',
+            "</svg>\n",
+        ]
+    ).encode()
+
+
+def path_data(path):
+    """SVG path data of a polyline given as complex vertices."""
+    return "M" + " L".join(f"{z.real:.4f},{z.imag:.4f}" for z in path)
+
+
+def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=None, notes=()):
+    """SVG of ``Dots`` layers, one Inkscape layer each, on a ``size = (width, height)`` user-unit canvas.
+
+    Round dots are circles, foreshortened ones ellipses, pen-drawn ones stroked paths ``pen_width`` wide.
+    Filled dots also carry a stroke of their colour (width 0), so that ``vpype read`` keeps each layer's pen
+    colour. ``notes`` become comments and the ``<desc>``; a background other than white is a filled rectangle.
+    """
+    width, height = size
+    value, unit = physical_width
+    parts = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
+        f'width="{value:g}{unit}" height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
+    ]
+    parts.extend(f"<!-- {note} -->" for note in notes)
+    if notes:
+        parts.append(f"<desc>{'; '.join(notes)}</desc>")
+    if tuple(background) != WHITE:
+        parts.append(f'<rect x="0" y="0" width="{width:g}" height="{height:g}" fill="{hex_colour(background)}"/>')
+    for index, dots in enumerate(layers, start=1):
+        parts.append(_svg_layer(index, dots, pen_width))
+    parts.append("</svg>\n")
+    return "\n".join(parts).encode()
+
+
+def _svg_layer(index, dots, pen_width):
+    colour = hex_colour(dots.colour)
+    label = f'id="layer{index}" inkscape:groupmode="layer" inkscape:label="{index}-{dots.name}"'
+    if dots.paths is not None:
+        head = (
+            f'<g {label} fill="none" stroke="{colour}" stroke-width="{pen_width:.4f}" '
+            'stroke-linecap="round" stroke-linejoin="round">'
+        )
+        body = [f'<path d="{path_data(path)}"/>' for path in dots.paths]
+    elif dots.squash is None:
+        head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
+        body = [
+            f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{r:.4f}"/>'
+            for (x, y), r in zip(dots.centres, dots.radii, strict=True)
+        ]
+    else:
+        head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
+        body = [
+            f'<ellipse cx="{x:.4f}" cy="{y:.4f}" rx="{r * s:.4f}" ry="{r:.4f}" '
+            f'transform="rotate({np.degrees(a):.2f} {x:.4f} {y:.4f})"/>'
+            for (x, y), r, s, a in zip(dots.centres, dots.radii, dots.squash, dots.angle, strict=True)
+        ]
+    return "\n".join([head, *body, "</g>"])

@@ -1,0 +1,50 @@
+"""Lengths and colours as users write them: ``200mm``, ``8in``, ``#1a2b3c``, ``navy``."""
+
+import re
+
+from PIL import ImageColor
+
+from ..errors import StippleError
+
+UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "px": 25.4 / 96}
+MIN_LENGTH_MM = 1e-3
+MAX_LENGTH_MM = 1e6
+
+
+def parse_length(text, name="length"):
+    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"800px"`` or a bare number (mm) -> (value, unit).
+
+    The length must lie between ``MIN_LENGTH_MM`` (1 µm) and ``MAX_LENGTH_MM`` (1 km).
+    """
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|in|px)?\s*", str(text))
+    allowed = f"a number with a unit (mm, cm, in, px) from {MIN_LENGTH_MM:g}mm to {MAX_LENGTH_MM:g}mm"
+    if not match:
+        raise StippleError(f"{name} must be {allowed}, not {text!r}")
+    value, unit = float(match.group(1)), match.group(2) or "mm"
+    if not MIN_LENGTH_MM <= value * UNITS[unit] <= MAX_LENGTH_MM:
+        raise StippleError(f"{name} must be {allowed}, not {text!r}")
+    return value, unit
+
+
+def to_user_units(length, physical_width, canvas_width):
+    """A physical ``(value, unit)`` length in user units of a canvas ``physical_width`` wide."""
+    value, unit = length
+    width_value, width_unit = physical_width
+    return value * UNITS[unit] / (width_value * UNITS[width_unit]) * canvas_width
+
+
+WHITE, BLACK = (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)
+
+
+def hex_colour(colour):
+    """``#rrggbb`` of an RGB triple in [0, 1]."""
+    return "#" + "".join(f"{int(round(255 * channel)):02x}" for channel in colour)
+
+
+def parse_colour(text, name="color"):
+    """``#rrggbb``, ``#rgb`` or a CSS colour name (``white``, ``navy``) -> RGB in [0, 1]."""
+    try:
+        rgb = ImageColor.getrgb(str(text).strip())
+    except ValueError:
+        raise StippleError(f"{name} must be a colour such as #1a2b3c, #fff or white, not {text!r}") from None
+    return tuple(channel / 255 for channel in rgb[:3])

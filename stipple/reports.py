@@ -1,0 +1,127 @@
+"""Evaluation reports of saved point sets (``stipple evaluate``): which measures of ``stipple.evaluate`` apply to
+which kind of file (torus dots, sphere points, layered inks, one line), and the report's text form."""
+
+import numpy as np
+
+from .colour import parse_palette, separate
+from .errors import StippleError
+from .evaluate import evaluate_line, evaluate_sphere, evaluate_torus
+from .io.images import load_colour, load_input
+from .line import closed_length, line_problem
+from .multiclass import class_bandwidth
+from .sphere import sphere_density, sphere_problem
+from .torus import torus_problem
+
+
+def evaluation_report(
+    domain, points, names, input_source, *, bandwidth=None, kernel="distance", as_line=False, **options
+):
+    """The report of ``points`` read from a CSV (``domain`` "torus" pixels or "sphere" unit vectors; ``names``
+    each torus point's layer, or None) against ``input_source``.
+
+    ``options`` are the density's transfer as for the run (``invert``, ``gamma``, ``value_range``; sphere:
+    ``uniform``, ``lon0``; layered: ``palette``, ``black``).
+    """
+    if as_line:
+        return evaluate_line_points(points, domain, input_source, bandwidth, options)
+    if names is not None:
+        return evaluate_layers(points, names, input_source, bandwidth, options)
+    return evaluate_points(domain, points, input_source, bandwidth, kernel, options)
+
+
+def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
+    """The report of ``stipple evaluate --line``: E_N of the vertices, length, segments, the drawn line's PSNR."""
+    if domain != "torus" or input_source is None:
+        raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
+    weights = load_input(
+        input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+    )
+    problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
+    return evaluate_line(problem, pixels / np.array([weights.shape[1], weights.shape[0]]), weights)
+
+
+def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
+    """The evaluation report of torus pixels or sphere unit vectors against their input."""
+    if domain == "torus":
+        if input_source is None:
+            raise StippleError("missing INPUT: the image or map the points were made from")
+        weights = load_input(
+            input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+        )
+        unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
+        problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10)
+        return evaluate_torus(problem, unit, weights)
+    density = sphere_density(
+        input_source,
+        uniform=options["uniform"],
+        invert=options["invert"],
+        gamma=options["gamma"],
+        value_range=options["value_range"],
+        lon0=options["lon0"],
+    )
+    problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
+    return evaluate_sphere(problem, points, density)
+
+
+def evaluate_layers(pixels, names, input_source, bandwidth, options):
+    """The report of all dots against the inks' summed density, with ``classes``: each ink's dots against its
+    own density (its count beside its quota ``M · mass share``)."""
+    if input_source is None:
+        raise StippleError("missing INPUT: the colour image the layered points were made from")
+    rgb = load_colour(input_source)
+    layers = separate(rgb, parse_palette(options["palette"]), options["black"])
+    unknown = sorted(set(names.tolist()) - {layer.name for layer in layers})
+    if unknown:
+        inks = ", ".join(layer.name for layer in layers)
+        raise StippleError(f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} ({inks})")
+    rows, columns = rgb.shape[:2]
+    unit = np.mod(pixels / np.array([columns, rows]), 1.0)
+    union = sum(layer.density for layer in layers)
+    report = evaluate_torus(torus_problem(union, len(unit), bandwidth, epsilon=1e-10), unit, union)
+    report["classes"] = []
+    for layer in layers:
+        chosen = names == layer.name
+        count, share = int(chosen.sum()), float(layer.density.sum() / union.sum())
+        entry = {"name": layer.name, "points": count, "mass_share": share, "quota": share * len(unit)}
+        if count >= 2:
+            band = None if bandwidth is None else class_bandwidth(bandwidth, count, len(unit))
+            problem = torus_problem(layer.density, count, band, epsilon=1e-10)
+            measured = evaluate_torus(problem, unit[chosen], layer.density)
+            entry.update({key: measured[key] for key in ("bandwidth", "energy", "energy_ratio_to_iid")})
+            entry["neighbour_distance_over_hexagonal"] = measured.get("neighbour_distance_over_hexagonal")
+        report["classes"].append(entry)
+    return report
+
+
+def format_report(report):
+    """The evaluation as aligned ``name: value`` lines (the spectrum only as its range)."""
+    lines = [
+        f"domain: {report['domain']}",
+        f"points: {report['points']}",
+        f"bandwidth: {report['bandwidth']}",
+        f"E_N: {report['energy']:.6e}",
+        f"E_N of i.i.d. samples (expected): {report['expected_iid_energy']:.6e}",
+        f"ratio to i.i.d.: {report['energy_ratio_to_iid']:.4g}",
+        f"untruncated energy (with the near field): {report['untruncated_energy']:.6e}",
+    ]
+    for item in report.get("similarity", []):
+        binned = f" (dots binned into pixels first: PSNR {item['psnr_binned']:.2f} dB)" if "psnr_binned" in item else ""
+        lines.append(f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f}{binned}")
+    if "neighbour_distance_over_hexagonal" in report:
+        stats = report["neighbour_distance_over_hexagonal"]
+        lines.append("nearest neighbour / hexagonal spacing: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+    for key in ("length_pixels", "max_over_mean_segment", "min_over_mean_segment"):
+        if key in report:
+            lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
+    for key in ("max_coefficient_error", "minimum_separation_degrees", "cap_discrepancy"):
+        if key in report:
+            lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
+    for item in report.get("classes", []):
+        line = f"ink {item['name']}: {item['points']} dots (quota {item['quota']:.2f})"
+        if "energy_ratio_to_iid" in item:
+            line += f", N {item['bandwidth']}, ratio to i.i.d. {item['energy_ratio_to_iid']:.4g}"
+        stats = item.get("neighbour_distance_over_hexagonal") or {}
+        if stats:
+            line += ", NN / hexagonal " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
+        lines.append(line)
+    return "\n".join(lines)

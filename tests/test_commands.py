@@ -1,0 +1,61 @@
+"""Every command of ``stipple``: its ``--help``, and one tiny run that writes its files."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+
+COMMANDS = ("colour", "design", "evaluate", "line", "render", "sphere", "torus")
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_every_command_is_registered():
+    assert sorted(main.commands) == sorted(COMMANDS)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_help(command):
+    result = run([command, "--help"])
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith("Usage: ") and f" {command} [OPTIONS]" in result.output.splitlines()[0]
+    assert "--help" in result.output
+
+
+@pytest.fixture
+def image(tmp_path):
+    rows, columns = np.mgrid[0:20, 0:30]
+    rgb = np.stack([columns * 8, rows * 12, 255 - columns * 8], axis=-1).astype(np.uint8)
+    path = tmp_path / "in.png"
+    Image.fromarray(rgb).save(path)
+    return path
+
+
+def tiny_runs(image, folder):
+    """One small run per command, each writing a file under ``folder``."""
+    dots = folder / "dots.csv"
+    return {
+        "torus": ["torus", image, "-M", 60, "-N", 12, "--iterations", 3, "-o", dots, "-o", folder / "t.svg"],
+        "sphere": ["sphere", "--uniform", "-M", 30, "-N", 4, "--iterations", 3, "-o", folder / "s.geojson"],
+        "colour": ["colour", image, "-M", 80, "-N", 12, "--iterations", 3, "-o", folder / "c.csv"],
+        "line": ["line", image, "-M", 40, "--iterations", 3, "-o", folder / "l.svg"],
+        "design": ["design", "-t", 3, "--iterations", 50, "-o", folder / "d.csv"],
+        "render": ["render", dots, "--like", image, "-o", folder / "r.png"],
+        "evaluate": ["evaluate", dots, image, "--json", folder / "e.json"],
+    }
+
+
+def test_one_tiny_run_per_command(image, tmp_path):
+    runs = tiny_runs(image, tmp_path)
+    assert sorted(runs) == sorted(COMMANDS)
+    for command, args in runs.items():  # in order: render and evaluate read the torus run's dots
+        result = run([*args, "-q"] if command not in ("evaluate",) else args)
+        assert result.exit_code == 0, f"{command}: {result.output}"
+        written = args[args.index("--json") + 1] if command == "evaluate" else args[-1]
+        assert written.stat().st_size > 0, command
+    assert np.loadtxt(tmp_path / "dots.csv", delimiter=",", skiprows=1).shape == (60, 2)
+    assert (tmp_path / "c.csv").read_text().startswith("x,y,layer\n")
