@@ -55,25 +55,57 @@ def commit_outputs(items):
     and SIGTERM held back during the renames. Any failure or signal before that removes every temporary
     file and leaves every existing output as it was.
     """
-    temporaries = []
-    try:
+    with StagedOutputs() as staged:
         for path, data in items:
-            if str(path) != "-":
-                temporaries.append((_write_temporary(path, data), path))
-        for path, data in items:
-            if str(path) == "-":
-                write_stdout(data)
+            staged.add(path, data)
+        staged.commit()
+
+
+class StagedOutputs:
+    """Outputs written to temporary files as they come and renamed over their targets all at once.
+
+    ``add`` writes one file's temporary (fsynced) beside its target at once, so that a long run (the frames of
+    a video) need not hold every file in memory; ``-`` (stdout) is kept until ``commit``. ``commit`` writes
+    stdout, then renames every temporary with SIGINT and SIGTERM held back. Leaving the ``with`` block without
+    a commit (an error, a signal) removes every temporary file and leaves every existing output as it was.
+    """
+
+    def __init__(self):
+        self._temporaries = []
+        self._stdout = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.discard()
+
+    def add(self, path, data):
+        """Stage ``data`` (bytes) for ``path``."""
+        if str(path) == "-":
+            self._stdout.append(data)
+        else:
+            self._temporaries.append((_write_temporary(path, data), path))
+
+    def commit(self):
+        """Write stdout's share, then rename every staged file over its target."""
+        for data in self._stdout:
+            write_stdout(data)
+        self._stdout = []
         with _signals_held():
-            while temporaries:
-                temporary, path = temporaries[0]
+            while self._temporaries:
+                temporary, path = self._temporaries[0]
                 try:
                     os.replace(temporary, path)
                 except OSError as error:
                     raise StippleError(f"{path}: cannot write ({error.strerror})") from None
-                temporaries.pop(0)
-    finally:
-        for temporary, _ in temporaries:
+                self._temporaries.pop(0)
+
+    def discard(self):
+        """Remove every temporary file not yet renamed."""
+        for temporary, _ in self._temporaries:
             _remove(temporary)
+        self._temporaries = []
 
 
 def _write_temporary(path, data):
