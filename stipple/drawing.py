@@ -11,7 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .tone import fit_inside, tone_radii_layers
+
 TOUCH_FRACTION = 0.45
+STYLES = ("tone", "plotter")
 MIN_SQUASH = 0.02
 
 
@@ -72,6 +75,31 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None):
     return [
         Dots(name, colour, c, radii[end - len(c) : end]) for (name, colour, c), end in zip(placed, ends, strict=True)
     ]
+
+
+def tone_dots(layers, size, coverages, *, target=None):
+    """Tone-true ``Dots``: radii (``stipple.tone``) that make the drawn ink reproduce ``coverages``.
+
+    Parameters
+    ----------
+    layers : list of (str, tuple, numpy.ndarray)
+        ``(name, colour, centres)`` per ink, centres in canvas units.
+    size : (float, float)
+        The canvas's ``(width, height)``.
+    coverages : list of numpy.ndarray
+        Each ink's target coverage ``(H, W)`` in [0, 1] over the canvas (for one ink, the density ``w``).
+    target : numpy.ndarray, optional
+        ``(H, W, 3)`` colour the inks, multiplied on white paper, must print; then the inks are corrected
+        together against the drawn colour (``stipple.tone.tone_radii_layers``), otherwise each alone.
+
+    Dots that would cross the canvas's edge move inwards just enough (``fit_inside``, "clamp"): the picture
+    stays registered with the image.
+    """
+    pairs = [(centres, coverage) for (_, _, centres), coverage in zip(layers, coverages, strict=True)]
+    colours = None if target is None else [colour for _, colour, _ in layers]
+    radii = tone_radii_layers(pairs, size, colours=colours, target=target)
+    placed, _ = fit_inside([(c, r) for (c, _), r in zip(pairs, radii, strict=True)], size, how="clamp")
+    return [Dots(name, colour, c, r) for (name, colour, _), (c, r) in zip(layers, placed, strict=True)]
 
 
 def angular_distances(points):
@@ -150,3 +178,34 @@ def orthographic(points, view):
 def equirectangular(longitude, latitude, width):
     """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, lon -180 at the left."""
     return np.stack([(longitude + 180) / 360 * width, (90 - latitude) / 180 * width / 2], axis=1)
+
+
+# The darkness image that globe and map drawings are made tone-true against: pixels along the canvas's width.
+DARKNESS_PIXELS = 720
+
+
+def projected_darkness(darkness_at, projection, view):
+    """The darkness of a sphere picture's canvas (``sphere_canvas``), ``(H, W)`` in [0, 1], white off the globe.
+
+    ``darkness_at(longitude, latitude)`` (degrees, arrays) gives the sphere's darkness; each canvas pixel takes
+    it at the point of the sphere that the projection draws there ("equirect": the 2:1 map, lon -180 on the
+    left; "ortho": the visible side around ``view``).
+    """
+    width, height = sphere_canvas(projection)
+    columns = DARKNESS_PIXELS
+    rows = int(round(columns * height / width))
+    x, y = np.meshgrid((np.arange(columns) + 0.5) / columns, (np.arange(rows) + 0.5) / rows)
+    if projection == "equirect":
+        return np.clip(darkness_at(360.0 * x - 180.0, 90.0 - 180.0 * y), 0.0, 1.0)
+    u, v = (2 * x - 1) / GLOBE, (1 - 2 * y) / GLOBE
+    inside = u * u + v * v < 1
+    lon, lat = np.radians(view)
+    centre = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
+    north = np.cross(centre, east)
+    depth = np.sqrt(np.clip(1 - u * u - v * v, 0.0, 1.0))
+    points = u[inside][:, None] * east + v[inside][:, None] * north + depth[inside][:, None] * centre
+    darkness = np.zeros((rows, columns))
+    longitude = np.degrees(np.arctan2(points[:, 1], points[:, 0]))
+    darkness[inside] = darkness_at(longitude, np.degrees(np.arcsin(np.clip(points[:, 2], -1, 1))))
+    return np.clip(darkness, 0.0, 1.0)

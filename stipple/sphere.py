@@ -128,6 +128,13 @@ class CellMap:
         """The map itself (densities share this interface for sampling and cap masses)."""
         return self
 
+    def at(self, longitude, latitude):
+        """The density at ``(longitude, latitude)`` degrees (arrays of one shape): the value of their cell."""
+        rows, columns = self.values.shape
+        row = np.clip(np.floor((90.0 - np.asarray(latitude)) / 180.0 * rows), 0, rows - 1).astype(int)
+        column = np.floor(np.mod(np.asarray(longitude) - self.lon0, 360.0) / 360.0 * columns).astype(int)
+        return self.values[row, np.minimum(column, columns - 1)]
+
     def centres_and_masses(self):
         """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
         rows, columns = self.values.shape
@@ -373,6 +380,16 @@ BUILTINS = {
     "rbf": AnalyticDensity(rbf_node_density, "builtin:rbf"),
     "uniform": UniformDensity(),
 }
+
+
+def picture_darkness(density):
+    """``darkness_at(lon, lat)`` in [0, 1] that a tone-true picture of ``density`` draws (the density, divided
+    by its largest value where that exceeds 1), or None for the uniform density, whose picture shows points."""
+    if isinstance(density, UniformDensity):
+        return None
+    cells = density.cell_map()
+    scale = max(1.0, float(cells.values.max()))
+    return lambda longitude, latitude: cells.at(longitude, latitude) / scale
 
 
 def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_range=None, lon0=0.0):

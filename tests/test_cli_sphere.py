@@ -34,7 +34,7 @@ def test_sphere_outputs(map_path, tmp_path):
     coordinates = geojson["features"][0]["geometry"]["coordinates"]
     np.testing.assert_allclose(coordinates, table, atol=1e-6)
     svg = (tmp_path / "dots.svg").read_text()
-    shown = svg.count("<ellipse")  # the visible side, foreshortened
+    shown = svg.count("<circle")  # the visible side, tone-true round dots on the drawing
     assert 0 < shown < 200 and f"{shown} of 200 dots on the visible side" in svg
     assert Image.open(tmp_path / "globe.png").size == (1024, 1024)
 

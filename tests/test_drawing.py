@@ -33,8 +33,8 @@ def radius_over_spacing(table):
     return table[:, 2] / distances[:, 1]
 
 
-def test_default_radius_leaves_neighbours_apart_on_the_portrait(tmp_path):
-    run(["torus", PORTRAIT, "-M", 3000, "--iterations", 15, "-q", "-o", tmp_path / "p.svg"])
+def test_plotter_style_leaves_neighbours_apart_on_the_portrait(tmp_path):
+    run(["torus", PORTRAIT, "-M", 3000, "--iterations", 15, "--style", "plotter", "-q", "-o", tmp_path / "p.svg"])
     table = circles(tmp_path / "p.svg")
     ratio = radius_over_spacing(table)
     assert len(table) == 3000 and np.mean(ratio < 0.5) >= 0.99 and ratio.max() <= 0.45 + 1e-3
@@ -78,9 +78,12 @@ def ramp(tmp_path):
 def test_invert_draws_light_dots_on_black_where_the_image_is_light(ramp, tmp_path):
     run(["torus", ramp, "-M", 400, "--iterations", 10, "--invert", "-q", "-o", tmp_path / "i.png"])
     gray = np.asarray(Image.open(tmp_path / "i.png").convert("L"), dtype=float)
-    assert np.median(gray) < 40 and np.mean(gray > 200) > 0.02  # mostly dark, with light dots
+    assert gray.min() == 0 and gray.max() == 255  # white dots on black paper
     left, right = gray[:, : gray.shape[1] // 3], gray[:, -gray.shape[1] // 3 :]
     assert right.mean() > left.mean() + 20  # the light side of the image is the light side of the picture
+    # Tone-true: each third of the picture is as light as that third of the ramp (20 ... 235).
+    thirds = np.array_split(np.linspace(20, 235, 48), 3)
+    assert abs(left.mean() - thirds[0].mean()) < 15 and abs(right.mean() - thirds[2].mean()) < 15
 
 
 def test_background_and_colour_for_any_pair(ramp, tmp_path):

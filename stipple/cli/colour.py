@@ -3,6 +3,7 @@
 import time
 
 import click
+import numpy as np
 
 from ..errors import StippleError
 from ..halftone import INITS
@@ -66,9 +67,12 @@ def run_colour(image, options, started):
                 for layer, part in zip(layers, problem.slices, strict=True)
             ]
             ink = sum(layer.density for layer in layers).mean()
+            coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
             write_outputs(
                 options["outputs"],
-                lambda fmt: layered_torus_output(placed, shape, fmt, ink=ink, **settings),
+                lambda fmt: layered_torus_output(
+                    placed, shape, fmt, ink=ink, coverages=coverages, target=rgb, **settings
+                ),
             )
     except StippleError as error:
         raise click.ClickException(str(error)) from None

@@ -3,6 +3,7 @@
 import click
 import numpy as np
 
+from ..drawing import STYLES
 from ..errors import StippleError
 from ..halftone import DEFAULT_SETTLE, INITS
 from ..io.units import BLACK, WHITE, parse_colour, parse_length
@@ -178,6 +179,14 @@ def look_options(function):
             "previews the pen strokes.",
         ),
         click.option("--pen-width", default="0.3mm", show_default=True, help="Pen stroke width of the pen styles."),
+        click.option(
+            "--style",
+            type=click.Choice(STYLES),
+            default=None,
+            help="tone: each dot sized so that the drawn ink has the input's tone, darks included (dots may "
+            "overlap; the default for filled discs). plotter: one tone radius capped so that no two dots touch "
+            "(lighter than 27 % gray at most), drawing inset; the default for the pen dot styles.",
+        ),
     ]
     for option in reversed(options):
         function = option(function)
@@ -233,7 +242,17 @@ def render_settings(options):
         "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
         "dot_style": options["dot_style"],
         "pen_width": parse_length(options["pen_width"], "pen-width"),
+        "style": drawing_style(options.get("style"), options["dot_style"]),
     }
+
+
+def drawing_style(style, dot_style):
+    """``--style``, by default "tone" for filled discs and "plotter" for the pen dot styles."""
+    if style is None:
+        return "tone" if dot_style == "disc" else "plotter"
+    if style == "tone" and dot_style != "disc":
+        raise StippleError(f"--style tone draws filled discs; --dot-style {dot_style} is for --style plotter")
+    return style
 
 
 def is_default(ctx, name):

@@ -24,7 +24,11 @@ from .supervise import guarded_files, plot_order, write_outputs
     show_default=True,
     help="Output (.csv .svg .png .geojson); repeatable; '-' is CSV on stdout.",
 )
-@click.option("--like", default=None, help="Torus: the input image, for its size and mean tone.")
+@click.option(
+    "--like",
+    default=None,
+    help="Torus: the input image, for its size and the tone the dots draw (without it: plotter-style dots, 50 % ink).",
+)
 @click.option("--size", default=None, help="Torus: WIDTH,HEIGHT of the input in pixels (default: from the points).")
 @click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px).")
 @click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm.")
@@ -63,10 +67,10 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
                     ),
                 )
                 return
-            shape, ink, points = torus_canvas(points, like, size)
+            shape, darkness, points = torus_canvas(points, like, size, options["invert"])
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
-            write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, ink=ink, **settings))
+            write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, darkness=darkness, **settings))
     except StippleError as error:
         raise click.ClickException(str(error)) from None

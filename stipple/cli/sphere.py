@@ -52,7 +52,7 @@ def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
     from ..io.writers import sphere_output
-    from ..sphere import DESIGN_TOL, lon_lat, sphere_density, sphere_problem
+    from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
 
     started = time.perf_counter()
     map_source = resolve_input(ctx, map_source)
@@ -96,6 +96,7 @@ def sphere(ctx, map_source, **options):
                     projection=options["projection"],
                     view=view,
                     ink=density.mean,
+                    darkness_at=picture_darkness(density),
                     **settings,
                 ),
             )

@@ -88,7 +88,7 @@ def torus(ctx, image, **options):
             )
             write_outputs(
                 options["outputs"],
-                lambda fmt: torus_output(points, weights.shape, fmt, ink=weights.mean(), **settings),
+                lambda fmt: torus_output(points, weights.shape, fmt, darkness=weights, **settings),
             )
     except StippleError as error:
         raise click.ClickException(str(error)) from None

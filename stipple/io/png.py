@@ -140,13 +140,16 @@ def _coverage(dots, canvas_size, scale, pen_width):
         for path in dots.paths:
             draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
     elif dots.squash is None:
-        for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 0.5), strict=True):
-            draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=255)
+        # Pillow's box holds the indices of the first and last pixel covered: c -+ (r - 1/2) in pixel-centre
+        # coordinates, so that the disc covers about pi r^2 fine pixels (c -+ r drew it a pixel too wide); a dot
+        # smaller than a fine pixel is drawn as 2 x 2 of them.
+        for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 1.0), strict=True):
+            draw.ellipse((x - radius, y - radius, x + radius - 1, y + radius - 1), fill=255)
     else:
         for centre, radius, squash, angle in zip(
             dots.centres * scale, dots.radii * scale, dots.squash, dots.angle, strict=True
         ):
             draw.polygon(
-                ellipse_polygon(centre, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
+                ellipse_polygon(centre - 0.5, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
             )
     return mask

@@ -162,16 +162,17 @@ def parse_size(text):
     return height, width
 
 
-def torus_canvas(pixels, like, size):
-    """``(shape, ink, pixels)`` of torus points: the canvas of ``--like`` or ``--size`` with the points wrapped
-    onto it, or by default the smallest canvas from the origin that holds every point."""
+def torus_canvas(pixels, like, size, invert=False):
+    """``(shape, darkness, pixels)`` of torus points: the canvas of ``--like`` (and its density, the tone to
+    draw, inverted with ``invert``) or ``--size`` (no density) with the points wrapped onto it, or by default
+    the smallest canvas from the origin that holds every point."""
     if like is None and size is None:
         shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
         return (max(shape[0], 1), max(shape[1], 1)), None, pixels
-    ink = None
+    darkness = None
     if like is not None:
-        weights = load_input(like)
-        shape, ink = weights.shape, weights.mean()
+        darkness = load_input(like, invert=invert)
+        shape = darkness.shape
     else:
         shape = parse_size(size)
-    return shape, ink, np.mod(pixels, np.array([shape[1], shape[0]]))
+    return shape, darkness, np.mod(pixels, np.array([shape[1], shape[0]]))

@@ -15,8 +15,10 @@ from ..drawing import (
     ink_radius,
     inset,
     orthographic,
+    projected_darkness,
     sphere_canvas,
     squash_paths,
+    tone_dots,
 )
 from ..errors import StippleError
 from ..plotter import dot_paths
@@ -74,14 +76,19 @@ def draw_layers(layers, fmt, size, *, width, png_width, count, pen, background=W
     return png_bytes(picture)
 
 
-def torus_output(points, shape, fmt, **options):
+def torus_output(points, shape, fmt, *, darkness=None, **options):
     """Bytes of torus ``points`` (unit coordinates) in ``fmt`` for an image of ``shape = (H, W)``: one layer
-    of dots in ``color`` on ``background`` (see ``layered_torus_output``; CSV is ``x,y`` in pixels)."""
+    of dots in ``color`` on ``background`` (see ``layered_torus_output``; CSV is ``x,y`` in pixels).
+
+    ``darkness`` is the density ``w`` (H, W) the dots were placed from: the ink the tone style reproduces."""
     if fmt == ".csv":
         rows, columns = shape
         pixels = points * np.array([columns, rows])
         return csv_bytes([pixels[:, 0], pixels[:, 1]], ["x", "y"])
     color = options.pop("color", BLACK)
+    if darkness is not None:
+        options.setdefault("ink", float(np.mean(darkness)))
+        options["coverages"] = [darkness]
     return layered_torus_output([("dots", color, points)], shape, fmt, blend="over", **options)
 
 
@@ -98,16 +105,22 @@ def layered_torus_output(
     pen_width=(0.3, "mm"),
     background=WHITE,
     blend="multiply",
+    style="tone",
+    coverages=None,
+    target=None,
 ):
     """Bytes of layered torus dots in ``fmt``; ``layers`` are ``(name, colour, points)`` with points in unit
     coordinates of an image of ``shape = (H, W)``.
 
     CSV is ``x,y,layer`` in pixels; SVG one Inkscape layer per ink; PNG the inks printed on ``background``.
-    Drawings are inset by the largest radius so that no dot crosses the canvas's edge (the CSV keeps the
-    exact positions). The default radius of a dot is the one that makes the dots' ink equal ``ink`` (the
-    density's mean; 0.5 if unknown), capped at 0.45 × its distance to the nearest dot of any layer
-    (``stipple.drawing``); ``dot_radius`` (physical ``(value, unit)``) fixes it. ``dot_style`` "disc" draws
-    filled discs; "circle", "filled" and "point" pen paths ``pen_width`` wide (a plotter preview in the PNG).
+    ``style`` "tone" (given ``coverages``, each ink's target coverage (H, W), and filled discs): each dot's
+    radius makes the drawn ink reproduce its coverage, darks included (``stipple.drawing.tone_dots``; with
+    ``target``, the (H, W, 3) colour the inks multiplied on white must print); dots crossing the edge move in.
+    "plotter": the radius that makes the dots' ink equal ``ink`` (the density's mean; 0.5 if unknown), capped
+    at 0.45 × the distance to the nearest dot of any layer, so no two dots touch, and the drawing inset by the
+    largest radius (``stipple.drawing.flat_dots``). The CSV keeps the exact positions. ``dot_radius``
+    (physical ``(value, unit)``) fixes every radius. ``dot_style`` "disc" draws filled discs; "circle",
+    "filled" and "point" pen paths ``pen_width`` wide (a plotter preview in the PNG).
     """
     rows, columns = shape
     count = sum(len(points) for _, _, points in layers)
@@ -119,10 +132,15 @@ def layered_torus_output(
     if fmt in (".geojson", ".json"):
         raise StippleError("GeoJSON output is for sphere points")
     radius, stroke, pen = _look(width, columns, dot_radius, dot_style, pen_width)
-    tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
-    drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
-    drawn = with_pen_paths(drawn, dot_style, pen)
-    notes = [f"{count} dots in {len(drawn)} layer(s), inset {_margin(drawn, stroke):.4g} user units from the edges"]
+    if style == "tone" and coverages is not None and radius is None and dot_style == "disc":
+        drawn = tone_dots(placed, (columns, rows), coverages, target=target)
+        notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii"]
+    else:
+        tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
+        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
+        drawn = with_pen_paths(drawn, dot_style, pen)
+        margin = _margin(drawn, stroke)
+        notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
     return draw_layers(
         drawn,
         fmt,
@@ -159,14 +177,19 @@ def sphere_output(
     background=WHITE,
     dot_style="disc",
     pen_width=(0.3, "mm"),
+    style="tone",
+    darkness_at=None,
 ):
     """Bytes of sphere ``points`` (unit vectors; ``lon_lat`` their degrees) in ``fmt``.
 
     CSV is ``lon,lat`` in degrees or ``x,y,z``; GeoJSON a MultiPoint. SVG and PNG draw ``projection``:
     "equirect" every dot on the 2:1 map (inset from the edges like torus dots), "ortho" the visible side of
     the globe around ``view = (lon, lat)``, each dot foreshortened towards the limb (an ellipse), so the limb
-    keeps its tone; the SVG says how many dots are on the visible side. The default angular radius keeps the
-    tone (``ink`` of the sphere, 0.5 if unknown), capped at 0.45 × the great-circle distance to the nearest dot.
+    keeps its tone; the SVG says how many dots are on the visible side. ``style`` "plotter" (or "tone" without
+    ``darkness_at``, e.g. a uniform sphere): the angular radius that keeps the mean tone (``ink``, 0.5 if
+    unknown), capped at 0.45 × the great-circle distance to the nearest dot. "tone" with ``darkness_at(lon,
+    lat)`` (the map's darkness in [0, 1]): round dots sized on the drawn canvas so that the picture has the
+    map's tone, darks included (``stipple.drawing.tone_dots`` against ``projected_darkness``).
     """
     longitude, latitude = lon_lat
     if fmt == ".csv":
@@ -178,6 +201,9 @@ def sphere_output(
         return geojson_bytes(np.stack([longitude, latitude], axis=1), {"points": len(points)})
     canvas = sphere_canvas(projection)
     fixed, stroke, pen = _look(width, canvas[0], dot_radius, dot_style, pen_width)
+    if style == "tone" and darkness_at is not None and fixed is None and dot_style == "disc":
+        drawn, notes = _tone_sphere(points, lon_lat, projection, view, color, darkness_at)
+        return _sphere_picture([drawn], fmt, canvas, projection, width, png_width, background, pen, notes)
     per_radian = canvas[0] / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
     tone = 2 * np.sqrt((0.5 if ink is None else ink) / max(len(points), 1))
     angles = (
@@ -199,12 +225,35 @@ def sphere_output(
             f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
         ]
     layers = with_pen_paths([drawn], dot_style, pen)
+    return _sphere_picture(layers, fmt, canvas, projection, width, png_width, background, pen, notes)
+
+
+def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
+    """One layer of tone-true round dots on the sphere picture's canvas, and the SVG's note."""
+    canvas = sphere_canvas(projection)
+    if projection == "equirect":
+        centres = equirectangular(*lon_lat, canvas[0])
+        note = f"{len(points)} dots, equirectangular (all of them), tone-true radii"
+    else:
+        centres, depth = orthographic(points, view)
+        centres = centres[depth > 0]
+        note = (
+            f"{len(centres)} of {len(points)} dots on the visible side (orthographic, view "
+            f"{view[0]:g},{view[1]:g}), tone-true radii"
+        )
+    coverage = projected_darkness(darkness_at, projection, view)
+    return tone_dots([("dots", color, centres)], canvas, [coverage])[0], [note]
+
+
+def _sphere_picture(layers, fmt, canvas, projection, width, png_width, background, pen, notes):
+    """SVG or PNG bytes of a sphere picture's layers (the globe's outline under an orthographic PNG)."""
     if fmt == ".svg":
         return svg_document(layers, canvas, width, background=background, pen_width=pen, notes=notes)
+    count = sum(len(dots.centres) for dots in layers)
     picture = render_picture(
         layers,
         canvas,
-        png_width or default_png_width(len(points)),
+        png_width or default_png_width(count),
         background=background,
         pen_width=pen,
         underlay=_globe_outline if projection == "ortho" else None,

@@ -1,0 +1,83 @@
+"""The drawn picture, blurred as a viewer sees it, has the input's tone (tone style), or never lets dots touch
+(plotter style): gray, inverted, colour and the globe, through the commands a user runs."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+from scipy.ndimage import gaussian_filter
+
+from stipple.cli import main
+
+SAMPLES = Path(__file__).resolve().parent.parent / "samples"
+
+
+def run(args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exit_code == 0, result.output
+    return result
+
+
+def blurred_pair(input_path, picture_path, sigma):
+    """Input and drawn luminance on the input's grid (box-filtered), both blurred by ``sigma`` input pixels."""
+    target = np.asarray(Image.open(input_path).convert("L"), dtype=float) / 255
+    drawn = Image.open(picture_path).convert("L").resize(target.shape[::-1], Image.BOX)
+    blur = lambda values: gaussian_filter(values, sigma, mode="reflect")  # noqa: E731
+    return blur(target), blur(np.asarray(drawn, dtype=float) / 255)
+
+
+def tone_curve(target, drawn):
+    """Mean input and drawn luminance per tenth of the input's (blurred) luminance."""
+    tenth = np.minimum((target * 10).astype(int), 9)
+    return np.array([(target[tenth == k].mean(), drawn[tenth == k].mean()) for k in range(10) if np.any(tenth == k)])
+
+
+@pytest.fixture(scope="module")
+def camera(tmp_path_factory):
+    """The camera man (dark coat, light sky) at M = 3000 in the tone and the plotter style."""
+    folder = tmp_path_factory.mktemp("camera")
+    common = ["torus", SAMPLES / "camera128.png", "-M", 3000, "--iterations", 40, "-q", "--seed", 1]
+    run(common + ["-o", folder / "tone.png", "-o", folder / "tone.csv"])
+    run(common + ["--style", "plotter", "-o", folder / "plotter.png", "-o", folder / "plotter.svg"])
+    return folder
+
+
+def test_tone_style_keeps_the_tone_curve_darks_included(camera):
+    target, drawn = blurred_pair(SAMPLES / "camera128.png", camera / "tone.png", 4)
+    assert np.sqrt(np.mean((target - drawn) ** 2)) < 0.03
+    curve = tone_curve(target, drawn)
+    assert curve[0, 0] < 0.1 and np.abs(curve[:, 0] - curve[:, 1]).max() < 0.04
+
+
+def test_plotter_style_cannot_draw_the_darks(camera):
+    """The capped radius: non-touching discs leave the coat gray (the limit the tone style removes)."""
+    target, drawn = blurred_pair(SAMPLES / "camera128.png", camera / "plotter.png", 4)
+    curve = tone_curve(target, drawn)
+    assert curve[0, 0] < 0.1 and curve[0, 1] > 0.2
+
+
+def test_tone_style_moves_no_dot_off_its_place_except_at_the_edge(camera):
+    """The tone style keeps the picture registered: the CSV positions are the drawn centres (no inset)."""
+    run(["render", camera / "tone.csv", "--like", SAMPLES / "camera128.png", "-o", camera / "again.svg"])
+    svg = (camera / "again.svg").read_text()
+    found = re.findall(r'<circle cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"', svg)
+    drawn = np.array(found, dtype=float)
+    placed = np.loadtxt(camera / "tone.csv", delimiter=",", skiprows=1)
+    assert len(drawn) == 3000 and "tone-true radii" in svg
+    moved = np.hypot(*(drawn[:, :2] - placed).T)
+    near_edge = np.any((placed < drawn[:, 2:]) | (placed > 128 - drawn[:, 2:]), axis=1)
+    assert np.all(moved[~near_edge] < 1e-3) and np.all(moved[near_edge] <= drawn[near_edge, 2] * np.sqrt(2))
+    assert np.all(drawn[:, :2] - drawn[:, 2:] >= -1e-3) and np.all(drawn[:, :2] + drawn[:, 2:] <= 128 + 1e-3)
+
+
+def test_inverted_tone_is_the_light(tmp_path):
+    """White dots on black: the drawn light follows the image's light, on a ramp from 8 % to 92 % gray."""
+    ramp = tmp_path / "ramp.png"
+    Image.fromarray(np.tile(np.linspace(20, 235, 96).astype(np.uint8), (64, 1))).save(ramp)
+    run(["torus", ramp, "-M", 1500, "--iterations", 30, "--invert", "-q", "-o", tmp_path / "i.png"])
+    target, drawn = blurred_pair(ramp, tmp_path / "i.png", 4)
+    inner = (slice(8, -8), slice(8, -8))  # the ramp is not periodic: its edges wrap on the torus
+    assert np.abs(target[inner] - drawn[inner]).mean() < 0.04
