@@ -81,3 +81,25 @@ def test_inverted_tone_is_the_light(tmp_path):
     target, drawn = blurred_pair(ramp, tmp_path / "i.png", 4)
     inner = (slice(8, -8), slice(8, -8))  # the ramp is not periodic: its edges wrap on the torus
     assert np.abs(target[inner] - drawn[inner]).mean() < 0.04
+
+
+def test_levels_stretch_a_faint_image_and_say_what_was_wrong(tmp_path):
+    faint = tmp_path / "faint.png"
+    gray = np.linspace(80, 160, 64).astype(np.uint8)
+    Image.fromarray(np.tile(gray, (32, 1))).save(faint)
+    from stipple.io.images import load_density
+
+    assert np.ptp(load_density(faint)) < 0.33
+    stretched = load_density(faint, levels="auto")
+    assert stretched.min() == 0 and stretched.max() == 1  # the 0.5th and 99.5th percentiles go to the ends
+    np.testing.assert_allclose(load_density(faint, levels=(80 / 255, 160 / 255))[0], (160 - gray) / 80, atol=1e-9)
+    result = CliRunner().invoke(
+        main, ["torus", str(faint), "-M", "100", "--iterations", "2", "-o", str(tmp_path / "a.csv")]
+    )
+    assert result.exit_code == 0 and "--levels auto" in result.output  # a hint on stderr, nothing changed
+    for bad in ("0.6,0.2", "x", "0,2"):
+        args = ["torus", str(faint), "-M", "100", "--levels", bad, "-o", str(tmp_path / "b.csv")]
+        result = CliRunner().invoke(main, args)
+        assert result.exit_code != 0 and "levels must be" in result.output and "Traceback" not in result.output
+        assert len(result.output.strip().splitlines()) == 1
+    assert not (tmp_path / "b.csv").exists()

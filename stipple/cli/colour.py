@@ -88,8 +88,8 @@ def check_colour_options(options):
         )
     if options["invert"] or options["value_range"] is not None:
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
-    if options["gamma"] != 1.0:
-        raise StippleError("--gamma is for gray images and maps, not colour separation")
+    if options["gamma"] != 1.0 or options.get("levels") is not None:
+        raise StippleError("--gamma and --levels are for gray images and maps, not colour separation")
     if options["color"] is not None or options["background"] is not None:
         raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 

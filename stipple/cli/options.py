@@ -246,6 +246,17 @@ def render_settings(options):
     }
 
 
+def parse_levels(text):
+    """``--levels``: None, "auto" or ``(black, white)`` from "BLACK,WHITE" (range checked by the loader)."""
+    if text is None or text == "auto":
+        return text
+    try:
+        black, white = (float(part) for part in text.split(","))
+    except ValueError:
+        raise StippleError(f"--levels must be 'auto' or BLACK,WHITE (two numbers in [0, 1]), not {text!r}") from None
+    return black, white
+
+
 def drawing_style(style, dot_style):
     """``--style``, by default "tone" for filled discs and "plotter" for the pen dot styles."""
     if style is None:

@@ -3,6 +3,7 @@
 import time
 
 import click
+import numpy as np
 
 from ..errors import StippleError
 from ..io.commit import output_format
@@ -11,7 +12,7 @@ from ..io.png import check_png_outputs
 from ..io.points import read_torus_init
 from ..plotter import physical_centres
 from ..transforms import BACKENDS
-from .options import common_options, init_input, palette_options, render_settings, resolve_input
+from .options import common_options, init_input, palette_options, parse_levels, render_settings, resolve_input
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
 
@@ -40,6 +41,12 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
     help="Finish with the low-frequency correction (a few iterations of the plain E_N at N/6 and N/12; README, "
     "Defaults).",
 )
+@click.option(
+    "--levels",
+    default=None,
+    help="Images: gray values BLACK,WHITE in [0, 1] stretched to black and white before stippling, or 'auto' "
+    "(the 0.5th and 99.5th percentiles): a faint document's strokes get the full range (docs/picture.md).",
+)
 @palette_options(None)
 @click.pass_context
 def torus(ctx, image, **options):
@@ -61,8 +68,13 @@ def torus(ctx, image, **options):
         inputs = [("image", image), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             weights = load_input(
-                image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
+                image,
+                invert=options["invert"],
+                gamma=options["gamma"],
+                value_range=options["value_range"],
+                levels=parse_levels(options["levels"]),
             )
+            tone_hints(weights, options)
             check_png_outputs(
                 [output_format(path) for path in options["outputs"]],
                 weights.shape[::-1],
@@ -93,3 +105,27 @@ def torus(ctx, image, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+# Hints on stderr, never a silent change: a faint document (its gray values span less than this) and a mostly
+# dark image (mean darkness above this) are drawn as they are, with the option that would help named.
+FAINT_SPAN, DARK_MEAN = 0.6, 0.75
+
+
+def tone_hints(weights, options):
+    """One line each for a faint or a mostly dark input, unless --quiet, --levels or --invert was given."""
+    if options["quiet"] or options["levels"] is not None or options["invert"]:
+        return
+    low, high = np.percentile(weights, [0.5, 99.5])
+    if high - low < FAINT_SPAN:
+        click.echo(
+            f"stipple: note: the image's gray values span only {high - low:.0%} of the range; drawn as they are "
+            "(--levels auto stretches them to black and white: docs/picture.md)",
+            err=True,
+        )
+    if weights.mean() > DARK_MEAN:
+        click.echo(
+            f"stipple: note: the image is {weights.mean():.0%} dark on average; drawn dark as it is (--invert draws "
+            "its light parts as white dots on black: docs/picture.md)",
+            err=True,
+        )

@@ -160,7 +160,7 @@ def rescale(values, value_range=None, name="input"):
     return np.clip((values / 2 - low / 2) / (high / 2 - low / 2), 0.0, 1.0)
 
 
-def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None):
+def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=None, name=None):
     """Density ``w`` on a grid (row 0 = top/north) from an image or a ``.npy`` map.
 
     Parameters
@@ -173,6 +173,9 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
         Exponent applied to ``w`` after the above (``w**gamma``; > 1 lightens mid-tones).
     value_range : (float, float), optional
         ``.npy`` maps: the values sent to 0 and 1 (default: the map's minimum and maximum).
+    levels : "auto" or (float, float), optional
+        Images: the gray values ``(black, white)`` in [0, 1] stretched to black and white before the above
+        (a levels adjustment); "auto": the image's 0.5th and 99.5th percentiles. Default: none.
 
     Returns
     -------
@@ -180,8 +183,7 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
         ``w`` in [0, 1], shape ``(rows, columns)``.
     """
     name = name or str(getattr(source, "name", source))
-    if not gamma > 0 or not np.isfinite(gamma):
-        raise StippleError(f"gamma must be a positive number, not {gamma}")
+    _check_gamma(gamma)
     if value_range is not None:
         check_range(value_range)
     data = read_source(source)
@@ -190,7 +192,50 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, name=None
     if data.startswith(NPY_MAGIC):
         values = rescale(check_grid(load_array(data, name), name), value_range, name)
     else:
-        values = 1.0 - check_grid(load_gray(data, name), name)
+        values = 1.0 - stretch_levels(check_grid(load_gray(data, name), name), levels)
+    return _transfer(values, invert, gamma)
+
+
+def stretch_levels(gray, levels):
+    """Gray values with ``levels = (black, white)`` (or "auto": the 0.5th and 99.5th percentiles) sent to 0 and 1,
+    linearly, clipped; unchanged for None (see ``load_density``)."""
+    if levels is None:
+        return gray
+    black, white = np.percentile(gray, [0.5, 99.5]) if levels == "auto" else levels
+    if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
+        what = "the image has one gray value" if levels == "auto" else f"not {black:g},{white:g}"
+        raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1 ({what})")
+    return np.clip((gray - black) / (white - black), 0.0, 1.0)
+
+
+def image_density(image, *, invert=False, gamma=1.0, name="input"):
+    """Density ``w`` of a decoded PIL image, exactly as ``load_density`` makes it from an image file.
+
+    Parameters
+    ----------
+    image : PIL.Image.Image
+        A decoded picture (a video frame, say): gray values as ``load_gray`` reads them, alpha on white.
+    invert, gamma :
+        As for ``load_density``.
+    name : str
+        What error messages call the picture.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``w`` in [0, 1], shape ``(rows, columns)``: ``1 - u``, or ``u`` with ``invert``, to the power ``gamma``.
+    """
+    _check_gamma(gamma)
+    return _transfer(1.0 - check_grid(_gray_values(image, name), name), invert, gamma)
+
+
+def _check_gamma(gamma):
+    if not gamma > 0 or not np.isfinite(gamma):
+        raise StippleError(f"gamma must be a positive number, not {gamma}")
+
+
+def _transfer(values, invert, gamma):
+    """``values`` (dark = 1) as the density: inverted if asked, then to the power ``gamma``."""
     density = 1.0 - values if invert else values
     return density**gamma if gamma != 1.0 else density
 
