@@ -113,22 +113,32 @@ def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=Non
     """
     check_png_canvas(size, pixels_wide)
     scale, canvas_size = png_canvas(size, pixels_wide)
-    picture = np.empty((canvas_size[1], canvas_size[0], 3))
-    picture[:] = background
+    colours = [tuple(background)] + [tuple(dots.colour) for dots in layers]
+    channels = 1 if all(len(set(c)) == 1 for c in colours) else 3
+    # One float32 plane per channel (a gray picture needs one): the supersampled canvas is 16 million pixels
+    # for the default 1024-pixel PNG, and an (H, W, 3) float64 picture took most of the drawing time.
+    planes = [np.full((canvas_size[1], canvas_size[0]), background[k], dtype=np.float32) for k in range(channels)]
     if underlay is not None and layers:
         mask = Image.new("L", canvas_size, 0)
         underlay(ImageDraw.Draw(mask), scale)
-        coverage = np.asarray(mask, dtype=np.float64)[..., None] / 255.0 * 0.08
-        picture += coverage * (np.asarray(layers[0].colour) - picture)
+        _paint(planes, _fraction(mask, 0.08), layers[0].colour, "over")
     for dots in layers:
-        coverage = np.asarray(_coverage(dots, canvas_size, scale, pen_width), dtype=np.float64)[..., None] / 255.0
-        colour = np.asarray(dots.colour)
-        target = picture * colour if blend == "multiply" else colour
-        picture += coverage * (target - picture)
-    image = Image.fromarray(np.round(np.clip(picture, 0, 1) * 255).astype(np.uint8), "RGB")
-    if all(len(set(c)) == 1 for c in [tuple(background)] + [tuple(d.colour) for d in layers]):
-        image = image.convert("L")
+        _paint(planes, _fraction(_coverage(dots, canvas_size, scale, pen_width)), dots.colour, blend)
+    bands = [Image.fromarray(np.round(np.clip(plane, 0, 1) * 255).astype(np.uint8), "L") for plane in planes]
+    image = bands[0] if channels == 1 else Image.merge("RGB", bands)
     return image.reduce(SUPERSAMPLE)
+
+
+def _fraction(mask, scale=1.0):
+    """A coverage mask (``PIL.Image`` "L") as float32 fractions in [0, ``scale``]."""
+    return np.asarray(mask, dtype=np.float32) * np.float32(scale / 255.0)
+
+
+def _paint(planes, coverage, colour, blend):
+    """Lay one ink on the picture's planes in place: over what is below, or multiplied with it."""
+    for k, plane in enumerate(planes):
+        target = plane * np.float32(colour[k]) if blend == "multiply" else np.float32(colour[k])
+        plane += coverage * (target - plane)
 
 
 def _coverage(dots, canvas_size, scale, pen_width):
