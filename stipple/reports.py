@@ -1,16 +1,25 @@
-"""Evaluation reports of saved point sets (``stipple evaluate``): which measures of ``stipple.evaluate`` apply to
-which kind of file (torus dots, sphere points, layered inks, one line), and the report's text form."""
+"""Evaluation reports (``stipple evaluate``): which measures of ``stipple.evaluate`` apply to which kind of point
+file (torus dots, sphere points, layered inks, one line); a drawn picture's measures (``stipple.picture``); and the
+reports' text form."""
+
+import io
+import sys
 
 import numpy as np
 
 from .colour import parse_palette, separate
 from .errors import StippleError
 from .evaluate import evaluate_line, evaluate_sphere, evaluate_torus
-from .io.images import load_colour, load_input
+from .io.images import NPY_MAGIC, load_colour, load_density, load_input
+from .io.sources import read_source
 from .line import closed_length, line_problem
 from .multiclass import class_bandwidth
+from .picture import SIGMAS, floyd_steinberg, mean_chroma, measure_picture
 from .sphere import sphere_density, sphere_problem
 from .torus import torus_problem
+
+# Mean CIELAB chroma above which an input is measured in colour: a gray JPEG's noise stays well below it.
+GRAY_CHROMA = 2.0
 
 
 def evaluation_report(
@@ -125,3 +134,84 @@ def format_report(report):
             line += ", NN / hexagonal " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
         lines.append(line)
     return "\n".join(lines)
+
+
+def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
+    """The picture measures (``stipple.picture``) of a drawn PNG against the input it was drawn from.
+
+    ``colour``: CIELAB measures (True), luminance measures (False) or, None, colour exactly when the input is an
+    image with chroma (mean C*ab above ``GRAY_CHROMA``). ``options`` are the density's transfer as for the run
+    (``invert``, ``gamma``, ``levels``, ``value_range``): the gray reference is the tone the run was asked to draw,
+    ``1 - w`` (``w`` with ``invert``: white dots on black). ``dots``: also measure Floyd-Steinberg error
+    diffusion with about that many dots.
+    """
+    drawn = load_colour(picture_source, name=str(picture_source))
+    data = read_source(sys.stdin.buffer if input_source == "-" else input_source)
+    name = "<stdin>" if input_source == "-" else str(input_source)
+    if colour is None:
+        colour = not data.startswith(NPY_MAGIC) and mean_chroma(load_colour(io.BytesIO(data), name)) > GRAY_CHROMA
+    if colour:
+        reference = load_colour(io.BytesIO(data), name)
+    else:
+        density = load_density(io.BytesIO(data), name=name, **options)
+        reference = density if options.get("invert") else 1.0 - density
+    _check_aspect(drawn.shape, reference.shape, picture_source, input_source)
+    report = {
+        "picture": str(picture_source),
+        "input": name,
+        "measures": "colour" if colour else "gray",
+        "shape": list(reference.shape[:2]),
+        "drawn_shape": list(drawn.shape[:2]),
+        "inset": inset,
+        "stipple": [m.as_dict() for m in measure_picture(reference, drawn, sigmas=sigmas, inset=inset)],
+    }
+    if dots is not None:
+        baseline, inked = floyd_steinberg(reference, dots)
+        report["floyd_steinberg"] = {
+            "dots": inked,
+            "measures": [m.as_dict() for m in measure_picture(reference, baseline, sigmas=sigmas)],
+        }
+    return report
+
+
+def _check_aspect(drawn, reference, picture_source, input_source):
+    """A picture whose width : height differs from its input's by over 2 % is not a drawing of it."""
+    (rows, columns), (height, width) = drawn[:2], reference[:2]
+    if abs(np.log((columns / rows) / (width / height))) > 0.02:
+        raise StippleError(
+            f"{picture_source} is {columns}x{rows} pixels but {input_source} is {width}x{height}: "
+            "not the same width : height, so not a drawing of it"
+        )
+
+
+def format_picture_report(report):
+    """The picture measures as text: a line per blur (and the tone curve), then the Floyd-Steinberg baseline."""
+    rows, columns = report["drawn_shape"]
+    height, width = report["shape"]
+    lines = [
+        f"picture: {report['picture']} ({columns}x{rows}) against {report['input']} ({width}x{height}), "
+        f"{report['measures']} measures, blurred on the input's pixels"
+    ]
+    lines += _picture_lines("stipple", report["stipple"])
+    if "floyd_steinberg" in report:
+        lines += _picture_lines(
+            f"Floyd-Steinberg, {report['floyd_steinberg']['dots']} dots", report["floyd_steinberg"]["measures"]
+        )
+    return "\n".join(lines)
+
+
+def _picture_lines(name, measures):
+    for row in measures:
+        if "delta_e00" in row:
+            yield (
+                f"{name}, sigma {row['sigma']:g} px: CIEDE2000 {row['delta_e00']:.2f} (95th percentile "
+                f"{row['delta_e00_p95']:.2f}), chroma {row['chroma_ratio']:.3f} of the input's, "
+                f"mean L* difference {row['mean_L_difference']:+.2f}, luminance RMSE {row['luminance_rmse']:.4f}"
+            )
+            continue
+        yield (
+            f"{name}, sigma {row['sigma']:g} px: luminance RMSE {row['rmse']:.4f}, mean difference "
+            f"{row['mean_difference']:+.4f}, worst tenth {row['worst_tenth']:.4f}"
+        )
+        curve = "  ".join(f"{b['input']:.2f}->{b['output']:.2f}" for b in row["tone_curve"])
+        yield f"  tone curve (input -> drawn, per tenth): {curve}"

@@ -1,4 +1,5 @@
-"""``stipple evaluate``: how well saved points reproduce their input, as text or JSON (and a spectrum plot)."""
+"""``stipple evaluate``: how well saved points, or a drawn PNG, reproduce their input, as text or JSON (and a
+spectrum plot)."""
 
 import json
 
@@ -8,7 +9,8 @@ from ..errors import StippleError
 from ..io.commit import commit_outputs
 from ..io.png import spectrum_plot
 from ..io.points import read_points
-from .options import check_extension, check_longitude
+from ..picture import SIGMAS
+from .options import check_extension, check_longitude, parse_levels
 from .supervise import guarded_files
 
 
@@ -32,6 +34,29 @@ from .supervise import guarded_files
 @click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
 @click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
 @click.option("--line", "as_line", is_flag=True, help="POINTS are the vertices of one closed line (stipple line).")
+@click.option(
+    "--sigma",
+    "sigmas",
+    type=click.FloatRange(min=0, min_open=True),
+    multiple=True,
+    help="Pictures: blur in input pixels, repeatable (default 2 and 4).",
+)
+@click.option(
+    "--colour/--gray",
+    "--color/--grey",
+    "colour",
+    default=None,
+    help="Pictures: CIELAB or luminance measures (default: CIELAB when INPUT has colour).",
+)
+@click.option("--levels", default=None, help="Pictures: as for the run (auto or BLACK,WHITE).")
+@click.option("--inset", type=float, default=0.0, show_default=True, help="Pictures: undo a drawing's inset (px).")
+@click.option(
+    "--floyd-steinberg",
+    "fs_dots",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Pictures: also measure Floyd-Steinberg error diffusion with about this many dots.",
+)
 def evaluate(
     points_source,
     input_source,
@@ -47,9 +72,15 @@ def evaluate(
     json_path,
     spectrum_path,
     as_line,
+    sigmas,
+    colour,
+    levels,
+    inset,
+    fs_dots,
 ):
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
-    CSVs per ink and for all dots together."""
+    CSVs per ink and for all dots together. Given a drawn PICTURE.png instead of POINTS: its picture measures
+    against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma)."""
     from ..reports import evaluation_report, format_report
 
     options = {
@@ -60,6 +91,10 @@ def evaluate(
         "palette": palette,
         "black": black,
     }
+    if str(points_source).lower().endswith(".png"):
+        picture = {"sigmas": sigmas, "colour": colour, "levels": levels, "inset": inset, "fs_dots": fs_dots}
+        evaluate_picture(points_source, input_source, json_path, picture, options, spectrum_path or bandwidth)
+        return
     try:
         options["lon0"] = check_longitude("lon0", lon0)
         check_extension("--json", json_path, ".json")
@@ -88,4 +123,36 @@ def evaluate(
                 files.append(("-", (format_report(report) + "\n").encode()))
             commit_outputs(files)
     except StippleError as error:
+        raise click.ClickException(str(error)) from None
+
+
+def evaluate_picture(picture_source, input_source, json_path, picture, options, point_only):
+    """``stipple evaluate PICTURE.png INPUT``: the picture measures as text, or JSON with ``--json``."""
+    from ..reports import format_picture_report, picture_report
+
+    try:
+        if input_source is None or options["uniform"]:
+            raise StippleError("a picture is measured against the INPUT it was drawn from")
+        if point_only:
+            raise StippleError("--spectrum and --bandwidth are for points, not pictures")
+        check_extension("--json", json_path, ".json")
+        levels = parse_levels(picture["levels"])
+        transfer = {"invert": options["invert"], "gamma": options["gamma"], "value_range": options["value_range"]}
+        reports = [("--json", json_path)] if json_path else []
+        with guarded_files([("picture", picture_source), ("input", input_source)], [], reports=reports):
+            report = picture_report(
+                picture_source,
+                input_source,
+                colour=picture["colour"],
+                sigmas=picture["sigmas"] or SIGMAS,
+                inset=picture["inset"],
+                dots=picture["fs_dots"],
+                levels=levels,
+                **transfer,
+            )
+            files = [("-", (format_picture_report(report) + "\n").encode())] if json_path != "-" else []
+            if json_path is not None:
+                files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
+            commit_outputs(files)
+    except (StippleError, ValueError) as error:
         raise click.ClickException(str(error)) from None

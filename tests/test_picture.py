@@ -1,0 +1,152 @@
+"""Picture measures (stipple.picture, ``stipple evaluate PICTURE.png INPUT``) against exact cases."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+from stipple.picture import floyd_steinberg, measure_picture, on_grid
+
+pytest.importorskip("skimage")
+
+
+def ramp(rows=48, columns=64, low=0.1, high=0.8):
+    return np.tile(np.linspace(low, high, columns), (rows, 1))
+
+
+def colours(rows=40, columns=60, seed=0):
+    smooth = np.random.default_rng(seed).random((rows // 10, columns // 10, 3))
+    return np.asarray(Image.fromarray((smooth * 255).astype(np.uint8)).resize((columns, rows)), float) / 255
+
+
+def lightness(gray):
+    """CIE L* of an sRGB gray value (D65 white), from the sRGB and CIELAB definitions."""
+    linear = gray / 12.92 if gray <= 0.04045 else ((gray + 0.055) / 1.055) ** 2.4
+    f = np.cbrt(linear) if linear > (6 / 29) ** 3 else linear / (3 * (6 / 29) ** 2) + 4 / 29
+    return 116 * f - 16
+
+
+def test_a_picture_measured_against_itself_is_perfect():
+    gray = measure_picture(ramp(), ramp())
+    assert [m.sigma for m in gray] == [2.0, 4.0]
+    assert all(m.rmse < 1e-12 and m.worst_tenth < 1e-12 for m in gray)
+    colour = measure_picture(colours(), colours())
+    assert all(m.delta_e00 < 1e-9 and m.chroma_ratio == pytest.approx(1) for m in colour)
+
+
+def test_a_fine_checkerboard_is_its_mean_gray_from_afar_but_not_up_close():
+    reference = np.full((64, 64), 0.5)
+    checkerboard = np.indices((64, 64)).sum(axis=0) % 2.0
+    far, near = measure_picture(reference, checkerboard, sigmas=(4.0, 0.3))
+    assert far.rmse < 1e-3
+    assert near.rmse > 0.2
+
+
+def test_a_tone_shift_is_measured_as_that_shift_in_every_tenth():
+    (measures,) = measure_picture(ramp(), ramp() + 0.05, sigmas=(3.0,))
+    assert measures.rmse == pytest.approx(0.05)
+    assert measures.mean_difference == pytest.approx(0.05)
+    assert measures.worst_tenth == pytest.approx(0.05)
+    assert [round(b.low, 1) for b in measures.tone_curve] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]
+    assert all(b.output - b.input == pytest.approx(0.05) for b in measures.tone_curve)
+    assert sum(b.pixels for b in measures.tone_curve) == ramp().size
+
+
+def test_ciede2000_of_two_grays_is_their_lightness_difference_over_sl():
+    """For neutral colours CIEDE2000 reduces to dL / S_L, S_L = 1 + 0.015 (L - 50)^2 / sqrt(20 + (L - 50)^2)."""
+    a, b = 0.5, 0.6
+    lab_a, lab_b = lightness(a), lightness(b)
+    mean = (lab_a + lab_b) / 2
+    sl = 1 + 0.015 * (mean - 50) ** 2 / np.sqrt(20 + (mean - 50) ** 2)
+    (measures,) = measure_picture(np.full((20, 30, 3), a), np.full((20, 30, 3), b), sigmas=(2.0,))
+    assert measures.delta_e00 == pytest.approx((lab_b - lab_a) / sl, rel=1e-6)
+    assert measures.mean_L_difference == pytest.approx(lab_b - lab_a, rel=1e-6)
+    assert measures.luminance_rmse == pytest.approx(0.1)
+
+
+def test_a_gray_drawing_of_a_colour_input_has_no_chroma():
+    reference = colours()
+    (measures,) = measure_picture(reference, reference @ [0.299, 0.587, 0.114], sigmas=(2.0,))
+    assert measures.chroma_ratio < 0.01
+    assert measures.delta_e00 > 5
+
+
+def test_a_picture_drawn_larger_and_inset_comes_back_onto_the_input_grid():
+    reference = ramp(24, 32)
+    big = np.kron(reference, np.ones((4, 4)))
+    assert np.allclose(on_grid(big, reference.shape), reference, atol=1e-6)
+    padded = np.pad(big, 8, constant_values=1.0)  # a 2-input-pixel margin on every side of a 32 x 24 input
+    assert np.allclose(on_grid(padded, reference.shape, inset=2.0 * 32 / 36), reference, atol=1e-6)
+    with pytest.raises(ValueError, match="inset"):
+        on_grid(big, reference.shape, inset=12)
+
+
+def test_floyd_steinberg_has_about_the_dots_asked_for_and_the_tone():
+    reference = ramp(64, 96, 0.2, 0.9)
+    picture, dots = floyd_steinberg(reference, 2000)
+    assert abs(dots - 2000) < 0.03 * 2000
+    assert measure_picture(reference, picture, sigmas=(4.0,))[0].rmse < 0.03
+    colour, inked = floyd_steinberg(colours(60, 90), 1500)
+    assert colour.shape == (60, 90, 3) and abs(inked - 1500) < 0.05 * 1500
+
+
+def test_bad_arguments_name_the_parameter():
+    with pytest.raises(ValueError, match="sigmas"):
+        measure_picture(ramp(), ramp(), sigmas=(0.0,))
+    with pytest.raises(ValueError, match="picture"):
+        measure_picture(ramp(), ramp() + 1)
+    with pytest.raises(ValueError, match="count"):
+        floyd_steinberg(ramp(), 0)
+
+
+def save(path, values):
+    Image.fromarray(np.round(np.asarray(values) * 255).astype(np.uint8)).save(path)
+    return path
+
+
+def evaluate(*args):
+    return CliRunner().invoke(main, ["evaluate", *map(str, args)])
+
+
+def test_evaluate_reports_a_pictures_measures_as_json(tmp_path):
+    source = save(tmp_path / "in.png", ramp())
+    big = save(tmp_path / "big.png", np.kron(ramp(), np.ones((3, 3))) - 0.04)
+    result = evaluate(big, source, "--json", "-", "--sigma", "4", "--floyd-steinberg", "500")
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.output)
+    assert report["measures"] == "gray" and report["drawn_shape"] == [144, 192]
+    assert report["stipple"][0]["rmse"] == pytest.approx(0.04, abs=0.003)
+    assert report["floyd_steinberg"]["dots"] > 0
+    text = evaluate(big, source)
+    assert text.exit_code == 0 and "sigma 2 px: luminance RMSE 0.04" in text.output
+
+
+def test_evaluate_measures_the_tone_the_run_was_asked_for(tmp_path):
+    source = save(tmp_path / "in.png", ramp())
+    for options, perfect in (([], True), (["--invert"], True), (["--gamma", "2"], False)):
+        report = json.loads(evaluate(source, source, "--json", "-", *options).output)
+        assert (report["stipple"][0]["rmse"] < 1e-9) == perfect
+
+
+def test_evaluate_measures_colour_when_the_input_has_colour(tmp_path):
+    source = save(tmp_path / "in.png", colours())
+    report = json.loads(evaluate(source, source, "--json", "-").output)
+    assert report["measures"] == "colour" and report["stipple"][0]["delta_e00"] < 1e-9
+    assert json.loads(evaluate(source, source, "--json", "-", "--gray").output)["measures"] == "gray"
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda d: (d / "bad.png").write_bytes(b"not a png") and d / "bad.png", "cannot decode"),
+        (lambda d: save(d / "wide.png", ramp(10, 64)), "not the same width : height"),
+    ],
+)
+def test_evaluate_refuses_a_bad_picture_in_one_line(tmp_path, make, message):
+    source = save(tmp_path / "in.png", ramp())
+    result = evaluate(make(tmp_path), source)
+    assert result.exit_code == 1 and message in result.output
+    assert len(result.output.strip().splitlines()) == 1
