@@ -7,7 +7,8 @@ same run), their ratio, transform counts per iteration, the process's peak memor
 Each near-field case is run beside the same problem without it. Quote medians; compare ratios within one run.
 Scale cases (``bench/scale.py``, one process each, with its own peak memory): the torus with M = 10^6 on a
 1024² image (default N), and spherical designs of strength 200 (default M) and 1000 (M = 1,002,000) timed to
-their target (largest error 1e-10).
+their target (largest error 1e-10). Video cases (``bench/video.py``): seconds per warm-started frame against a
+cold single-image run, the still dots' moves and each frame's E_N against its cold run's, at M = 2000 and 20000.
 """
 
 import argparse
@@ -21,6 +22,7 @@ from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
+from video import clips, video_case  # bench/video.py, beside this script
 
 from stipple.allocator import reuse_freed_memory
 from stipple.halftone import default_threads, run
@@ -35,6 +37,7 @@ PEAKED_CASES = [(10000, None)]  # M, N (None: the default chosen from the densit
 # Scale cases, each in its own process (bench/scale.py) so that each reports its own peak memory.
 SCALE_CASES = [("torus", "1000000", "1024", "5"), ("design", "200", "default"), ("design", "1000", "1002000")]
 QUICK_SCALE_CASES = [("torus", "20000", "256", "3"), ("design", "20", "default")]
+VIDEO_CASES, QUICK_VIDEO_CASES = (2000, 20000), (500,)
 
 
 def gaussian_bump(points, centre=(30.0, 20.0), sigma_degrees=8.0, floor=0.04):
@@ -184,6 +187,9 @@ def main(argv=None):
             record(case(problem, raw_sphere_seconds, "gaussian bump", "ducc0.sht", args.threads, args.iterations))
     for arguments in QUICK_SCALE_CASES if args.quick else SCALE_CASES:
         record(scale_case(arguments))
+    for count in QUICK_VIDEO_CASES if args.quick else VIDEO_CASES:
+        for name, clip in clips(count, 24, real=False):
+            record({"video": True, **video_case(clip, count, args.threads, name)})
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
     with open(args.output, "w") as stream:
         json.dump(report, stream, indent=2)

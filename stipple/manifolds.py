@@ -47,6 +47,30 @@ class Torus:
         return rng.random((count, 2))
 
 
+class PinnedTorus(Torus):
+    """The torus with some points held where they are (a video's still dots, ``stipple.video``).
+
+    Every gradient and every transported direction is zero at the pinned points, so CG moves only the free ones.
+
+    Parameters
+    ----------
+    scale : array_like
+        As for ``Torus``.
+    free : array_like of bool, shape (M,)
+        The points that may move.
+    """
+
+    def __init__(self, scale, free):
+        super().__init__(scale)
+        self.free = np.asarray(free, dtype=bool)[:, None]
+
+    def riesz(self, points, covector):
+        return np.where(self.free, super().riesz(points, covector), 0.0)
+
+    def transport(self, points, v, w):
+        return np.where(self.free, w, 0.0)
+
+
 class Sphere:
     """Unit sphere S² with tangent vectors in R³ (nothing is singular at the poles)."""
 

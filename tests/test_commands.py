@@ -7,7 +7,7 @@ from PIL import Image
 
 from stipple.cli import main
 
-COMMANDS = ("colour", "design", "evaluate", "line", "render", "sphere", "torus")
+COMMANDS = ("colour", "design", "evaluate", "line", "render", "sphere", "torus", "video")
 
 
 def run(args):
@@ -46,6 +46,7 @@ def tiny_runs(image, folder):
         "design": ["design", "-t", 3, "--iterations", 50, "-o", folder / "d.csv"],
         "render": ["render", dots, "--like", image, "-o", folder / "r.png"],
         "evaluate": ["evaluate", dots, image, "--json", folder / "e.json"],
+        "video": ["video", folder / "in.p?g", "-M", 50, "-N", 12, "--iterations", 3, "-o", folder / "v.csv"],
     }
 
 

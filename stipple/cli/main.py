@@ -20,6 +20,7 @@ from .render import render
 from .sphere import sphere
 from .supervise import SIGNALS, Interrupted
 from .torus import torus
+from .video import video
 
 
 class StippleGroup(click.Group):
@@ -69,5 +70,5 @@ def main():
     """Halftoning by discrepancy minimisation on the torus (images) and the sphere (global maps)."""
 
 
-for command in (torus, sphere, colour, line, design, evaluate, render):
+for command in (torus, sphere, colour, line, design, evaluate, render, video):
     main.add_command(command)

@@ -73,6 +73,7 @@ class StagedOutputs:
     def __init__(self):
         self._temporaries = []
         self._stdout = []
+        self._reserved = set()
 
     def __enter__(self):
         return self
@@ -87,8 +88,19 @@ class StagedOutputs:
         else:
             self._temporaries.append((_write_temporary(path, data), path))
 
+    def reserve(self, path):
+        """An empty temporary file beside ``path`` for the caller to write (a large file streamed as it grows,
+        such as a video), renamed over ``path`` at ``commit`` (and fsynced first) or removed with the others."""
+        temporary = _write_temporary(path, b"")
+        self._temporaries.append((temporary, path))
+        self._reserved.add(temporary)
+        return temporary
+
     def commit(self):
         """Write stdout's share, then rename every staged file over its target."""
+        for temporary, path in self._temporaries:
+            if temporary in self._reserved:
+                _fsync(temporary, path)
         for data in self._stdout:
             write_stdout(data)
         self._stdout = []
@@ -128,6 +140,14 @@ def _write_temporary(path, data):
             raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
         raise
     return temporary
+
+
+def _fsync(temporary, path):
+    try:
+        with open(temporary, "rb") as stream:
+            os.fsync(stream.fileno())
+    except OSError as error:
+        raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
 
 
 def _remove(path):

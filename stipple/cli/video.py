@@ -1,0 +1,183 @@
+"""``stipple video``: a video or a sequence of frames stippled with the same dots, frame after frame."""
+
+import shlex
+import signal
+import sys
+import time
+
+import click
+
+from ..errors import StippleError
+from ..halftone import check_integer
+from ..io.png import check_png_outputs
+from ..io.points import read_torus_init
+from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
+from ..transforms import BACKENDS
+from ..video import FRAME_ITERATIONS, VideoSettings, stipple_video
+from .options import common_options, init_input, render_settings, resolve_input
+from .supervise import SIGNALS, Progress, guarded_files, parse_every
+
+DEFAULT_FPS = 24.0
+
+
+@click.command()
+@click.argument("source", required=False)
+@common_options
+@click.option("--init", default="stratified", show_default=True, help="Frame 0's start (as for 'stipple torus').")
+@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@click.option(
+    "--hessian",
+    type=click.Choice(["gauss-newton", "full"]),
+    default="gauss-newton",
+    show_default=True,
+    help="Hessian of the Newton step.",
+)
+@click.option(
+    "--correct/--no-correct",
+    default=True,
+    show_default=True,
+    help="Frame 0's low-frequency correction (warm-started frames never make it).",
+)
+@click.option(
+    "--frame-iterations",
+    type=click.IntRange(min=0),
+    default=FRAME_ITERATIONS,
+    show_default=True,
+    help="CG iterations of every frame after the first (each starts from the previous frame's dots).",
+)
+@click.option(
+    "--fps",
+    type=click.FloatRange(min=0.01, max=1000),
+    default=None,
+    help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images).",
+)
+@click.option("--start", type=click.IntRange(min=0), default=0, show_default=True, help="First frame (from 0).")
+@click.option("--stop", type=click.IntRange(min=1), default=None, help="Stop before this frame (default: the end).")
+@click.option("--step", type=click.IntRange(min=1), default=1, show_default=True, help="Take every STEP-th frame.")
+@click.pass_context
+def video(ctx, source, **options):
+    """Stipple SOURCE, a video (MP4, MOV, WebM, GIF, ...; needs stipple[video]) or a folder or glob of frame
+    images, with the same dots in every frame: -o out.mp4, -o dots.csv (frame,x,y; row i of every frame is dot
+    i), -o 'frames/%04d.png' (one PNG or SVG per frame)."""
+    from ..io.writers import torus_output
+
+    started = time.perf_counter()
+    source = resolve_input(ctx, source)
+    if source is None:
+        raise click.UsageError("missing SOURCE (or 'input' in --config)")
+    try:
+        if options["order"]:
+            raise StippleError("--order reorders the dots, and a video keeps dot i as dot i: leave it out")
+        settings = render_settings(options)
+        plan = plan_outputs(options["outputs"])
+        frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
+        check_frames_spare_inputs(plan["frames"], frames)
+        reports = [("MP4", path) for path in plan["mp4"]]
+        reports += [("frame pattern", frame_path(path, frames.selection.start)) for path in plan["frames"]]
+        inputs = [("input", source), init_input(options["init"])]
+        with guarded_files([i for i in inputs if i], plan["csv"], options["checkpoint"], reports):
+            drawn = [".png"] if plan["mp4"] or any(p.lower().endswith(".png") for p in plan["frames"]) else []
+            check_png_outputs(drawn, frames.shape[::-1], options["png_width"], options["n_points"])
+            fps = options["fps"] or frames.fps or DEFAULT_FPS
+
+            def draw(points, density, fmt):
+                return torus_output(points, frames.shape, fmt, darkness=density, **settings)
+
+            with VideoOutputs(plan, frames.shape, draw, fps) as outputs:
+                result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
+                if result.frames:
+                    outputs.commit()
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    finish(result, stopped_by, options, started)
+
+
+def video_settings(options, shape):
+    """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
+    return VideoSettings(
+        n_points=options["n_points"],
+        bandwidth=options["bandwidth"],
+        backend=options["backend"],
+        threads=options["threads"],
+        **({} if options["epsilon"] is None else {"epsilon": options["epsilon"]}),
+        hessian=options["hessian"],
+        near_field=options["near_field"] is not False,
+        seed=options["seed"],
+        init=read_torus_init(options["init"], shape),
+        tol=options["tol"],
+        settle=options["settle"],
+        iterations=options["iterations"],
+        frame_iterations=options["frame_iterations"],
+        time_limit=options["time_limit"],
+        correct=options["correct"],
+        safeguard=options["safeguard"],
+        beta=options["beta"],
+    )
+
+
+class FrameProgress(Progress):
+    """The progress bar over frames (off when quiet or stderr is not a TTY)."""
+
+    def __call__(self, frame):
+        if not self.enabled:
+            return False
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=self.total, unit="frame", file=sys.stderr, dynamic_ncols=True)
+        self.bar.update(1)
+        done = "from the checkpoint" if frame.replayed else f"{frame.iterations} iterations"
+        self.bar.set_postfix_str(f"frame {frame.index}: {done}", refresh=False)
+        return False
+
+
+def run_frames(frames, settings, outputs, options):
+    """Every frame under the progress bar and signal handling: a first SIGINT / SIGTERM ends the frame under way
+    (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal."""
+    seconds, count = parse_every(options["checkpoint_every"])
+    progress = FrameProgress(frames.count, not options["quiet"] and sys.stderr.isatty())
+
+    def on_frame(frame):
+        outputs.add(frame.index, frame.points, frame.density)
+        progress(frame)
+
+    identity = {
+        "shape": list(frames.shape),
+        "invert": bool(options["invert"]),
+        "gamma": float(options["gamma"]),
+        "start": options["start"],
+        "step": options["step"],
+    }
+    with SIGNALS.deferred() as interruption:
+        try:
+            result = stipple_video(
+                frames.densities(invert=options["invert"], gamma=options["gamma"]),
+                settings,
+                on_frame=on_frame,
+                stop=interruption.stop_requested,
+                checkpoint=options["checkpoint"],
+                resume=options["resume"],
+                checkpoint_seconds=seconds,
+                checkpoint_frames=count,
+                identity=identity,
+            )
+        finally:
+            progress.close()
+    return result, interruption.signal
+
+
+def finish(result, stopped_by, options, started):
+    """The summary on stderr, and after a signal the exit status (130 / 143) and how to resume."""
+    if stopped_by is not None:
+        if options["checkpoint"]:
+            command = shlex.join(["stipple"] + sys.argv[1:] + ([] if options["resume"] else ["--resume"]))
+            hint = f"resume with: {command}"
+        else:
+            hint = "no --checkpoint was given, so the run cannot be resumed"
+        name = signal.Signals(stopped_by).name
+        written = "outputs written" if result.frames else "no frame was finished, no output written"
+        click.echo(f"stipple: stopped by {name} after {result.frames} frames; {written}; {hint}", err=True)
+        sys.exit(128 + stopped_by)
+    if not options["quiet"]:
+        click.echo(f"stipple: {result.message}; {time.perf_counter() - started:.1f} s", err=True)

@@ -1,0 +1,432 @@
+"""Videos and frame sequences: frames read from a video file (PyAV) or from a folder or glob of images as densities,
+the outputs of a stippled video (a ``frame,x,y`` CSV, MP4 and one PNG or SVG per frame) staged as they come, and
+the video checkpoint (pickle-free ``.npz``)."""
+
+import glob
+import hashlib
+import io
+import json
+import os
+import re
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+from PIL import Image
+
+from ..errors import StippleError
+from .commit import StagedOutputs, atomic_write, write_stdout
+from .images import image_density, load_array, load_density
+
+VIDEO_EXTENSIONS = (".mp4", ".mov", ".m4v", ".mkv", ".webm", ".avi", ".gif")
+FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
+PATTERN_EXTENSIONS = (".png", ".svg")
+# Pillow's decompression-bomb limit, also for frames that PyAV decodes.
+MAX_FRAME_PIXELS = int(Image.MAX_IMAGE_PIXELS or 89_478_485)
+_FIELD = re.compile(r"%(0?[1-9][0-9]?)?d")
+NEEDS_PYAV = "needs PyAV: pip install 'stipple[video]'"
+
+
+def require_av(what):
+    """The ``av`` module, or a StippleError saying that ``what`` needs the ``video`` extra."""
+    try:
+        import av
+    except ImportError:
+        raise StippleError(f"{what} {NEEDS_PYAV}") from None
+    return av
+
+
+@dataclass
+class FrameSource:
+    """Frames selected from a video or a sequence of images.
+
+    ``shape`` is the first selected frame's ``(rows, columns)``, ``count`` the number of frames selected when
+    known in advance (image sequences, videos whose stream says), ``fps`` the video's frame rate (None for
+    images), ``files`` every frame image of a sequence (empty for a video) and ``selection`` the indices taken.
+    """
+
+    name: str
+    shape: tuple
+    count: object
+    fps: object
+    files: tuple
+    selection: range
+
+    def densities(self, *, invert=False, gamma=1.0):
+        """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0."""
+        frames = _file_frames(self) if self.files else _video_frames(self)
+        found = False
+        for index, load in frames:
+            density = load(invert, gamma)
+            if density.shape != self.shape:
+                raise StippleError(
+                    f"{self.name}: frame {index} is {density.shape[1]}×{density.shape[0]} pixels, but the first is "
+                    f"{self.shape[1]}×{self.shape[0]}; every frame must have the same size"
+                )
+            found = True
+            yield index, density
+        if not found:
+            raise StippleError(f"{self.name}: no frame in the range selected")
+
+
+def open_frames(source, *, start=0, stop=None, step=1):
+    """The frames of ``source``: a video file (MP4, MOV, WebM, GIF, ... through PyAV), a folder of images or a
+    glob of them (taken in natural order: ``2.png`` before ``10.png``); frames ``start, start + step, ...`` before
+    ``stop``. The first selected frame is decoded at once, so that a bad input fails before any work."""
+    if not (isinstance(start, int) and start >= 0 and isinstance(step, int) and step >= 1):
+        raise StippleError(f"start must be >= 0 and step >= 1, not {start!r} and {step!r}")
+    if stop is not None and stop <= start:
+        raise StippleError(f"stop ({stop}) must be larger than start ({start})")
+    selection = range(start, stop if stop is not None else 2**62, step)
+    source = str(source)
+    files = _frame_files(source)
+    if files is not None:
+        chosen = range(start, min(len(files), selection.stop), step)
+        if not chosen:
+            raise StippleError(f"{source}: no frame in the range selected ({len(files)} frame images)")
+        shape = load_density(files[start]).shape
+        _check_size(source, shape)
+        return FrameSource(source, shape, len(chosen), None, tuple(files), chosen)
+    return _open_video(source, selection)
+
+
+def _frame_files(source):
+    """Frame images of a folder or a glob in natural order; None when ``source`` is a file."""
+    if os.path.isdir(source):
+        names = [os.path.join(source, name) for name in os.listdir(source)]
+        files = [name for name in names if os.path.splitext(name)[1].lower() in FRAME_EXTENSIONS]
+    elif any(char in source for char in "*?[") and not os.path.exists(source):
+        files = [name for name in glob.glob(source) if os.path.isfile(name)]
+    else:
+        return None
+    if not files:
+        raise StippleError(f"{source}: no frames (no image files {', '.join(FRAME_EXTENSIONS)} found)")
+    return sorted(files, key=lambda name: [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", name)])
+
+
+def _file_frames(source):
+    for index in source.selection:
+        path = source.files[index]
+        yield index, lambda invert, gamma, path=path: load_density(path, invert=invert, gamma=gamma)
+
+
+def _open_video(source, selection):
+    if not os.path.exists(source):
+        raise StippleError(f"{source}: no such file, folder or matching frame images")
+    if os.path.splitext(source)[1].lower() in FRAME_EXTENSIONS:
+        raise StippleError(f"{source}: an image, not a video; use 'stipple torus', or give a folder or glob of frames")
+    av = require_av(f"{source}: reading a video")
+    try:
+        with av.open(source) as container:
+            if not container.streams.video:
+                raise StippleError(f"{source}: not a video (no video stream)")
+            stream = container.streams.video[0]
+            rate = stream.average_rate or stream.guessed_rate
+            total = stream.frames or None
+            shape = (stream.height, stream.width)
+    except (av.FFmpegError, OSError, ValueError) as error:
+        if isinstance(error, StippleError):
+            raise
+        raise StippleError(f"{source}: not a video PyAV can read ({_reason(error)})") from None
+    _check_size(source, shape)
+    count = None if total is None else len(range(selection.start, min(total, selection.stop), selection.step))
+    if count == 0:
+        raise StippleError(f"{source}: no frame in the range selected ({total} frames)")
+    video = FrameSource(source, shape, count, float(rate) if rate else None, (), selection)
+    _, first = next(_video_frames(video, limit=1), (None, None))
+    if first is None:
+        raise StippleError(
+            f"{source}: the video has no frames"
+            if selection.start == 0
+            else f"{source}: no frame in the range selected"
+        )
+    video.shape = first(False, 1.0).shape
+    return video
+
+
+def _video_frames(source, limit=None):
+    """``(index, loader)`` of the selected frames of a video, decoded in order."""
+    av = require_av(f"{source.name}: reading a video")
+    yielded = 0
+    try:
+        with av.open(source.name) as container:
+            for index, frame in enumerate(container.decode(video=0)):
+                if index >= source.selection.stop:
+                    return
+                if index not in source.selection:
+                    continue
+                _check_size(source.name, (frame.height, frame.width))
+                image = Image.fromarray(frame.to_ndarray(format="rgba"), "RGBA")
+                name = f"{source.name} frame {index}"
+                yield (
+                    index,
+                    lambda invert, gamma, image=image, name=name: image_density(
+                        image, invert=invert, gamma=gamma, name=name
+                    ),
+                )
+                yielded += 1
+                if limit is not None and yielded >= limit:
+                    return
+    except (av.FFmpegError, OSError) as error:
+        raise StippleError(f"{source.name}: cannot decode the video ({_reason(error)})") from None
+
+
+def _reason(error):
+    return (getattr(error, "strerror", None) or str(error) or type(error).__name__).strip()
+
+
+def _check_size(name, shape):
+    rows, columns = shape
+    if rows < 2 or columns < 2 or rows * columns > MAX_FRAME_PIXELS:
+        raise StippleError(
+            f"{name}: frames of {columns}×{rows} pixels; they must be at least 2×2 and at most "
+            f"{MAX_FRAME_PIXELS} pixels (Pillow's decompression-bomb limit)"
+        )
+
+
+def frame_fingerprint(density):
+    """SHA-256 of a frame's density (what a checkpoint compares on resume)."""
+    return hashlib.sha256(np.ascontiguousarray(density, dtype=np.float64).tobytes()).hexdigest()
+
+
+def check_frame_pattern(path):
+    """``path`` if it is a frame pattern (one ``%d``, ``%04d``, ...; ``.png`` or ``.svg``), else a StippleError."""
+    text = str(path)
+    extension = os.path.splitext(text)[1].lower()
+    if extension not in PATTERN_EXTENSIONS:
+        raise StippleError(f"{text}: frame patterns write {' or '.join(PATTERN_EXTENSIONS)} files")
+    if len(_FIELD.findall(text)) != 1 or text.count("%") != 1:
+        raise StippleError(
+            f"{text}: a video writes one {extension[1:].upper()} per frame: the name needs one %d (or %04d) for "
+            "the frame number, e.g. frames/%04d.png"
+        )
+    return text
+
+
+def frame_path(pattern, index):
+    """The file of frame ``index`` for a frame pattern (``frames/%04d.png``, 7 -> ``frames/0007.png``)."""
+    return _FIELD.sub(lambda match: format(index, f"{match.group(1) or ''}d"), pattern)
+
+
+def plan_outputs(outputs):
+    """Outputs of a video by kind: ``csv`` (paths, ``-`` is stdout), ``mp4`` and ``frames`` (patterns)."""
+    plan = {"csv": [], "mp4": [], "frames": []}
+    for path in outputs:
+        extension = ".csv" if str(path) == "-" else os.path.splitext(str(path))[1].lower()
+        if extension in PATTERN_EXTENSIONS:
+            plan["frames"].append(check_frame_pattern(path))
+        elif extension in (".csv", ".mp4"):
+            plan[extension[1:]].append(str(path))
+        else:
+            raise StippleError(
+                f"{path}: unknown video output {extension or '(none)'}; use .csv, .mp4, or a .png or .svg frame pattern"
+            )
+    if plan["mp4"]:
+        require_av(f"{plan['mp4'][0]}: writing MP4")
+    if plan["csv"].count("-") > 1:
+        raise StippleError("'-' (stdout) may be given only once")
+    return plan
+
+
+def check_frames_spare_inputs(patterns, source):
+    """Refuse a frame pattern that would overwrite one of the input's frame images (a video has none)."""
+    if not source.files:
+        return
+    inputs = {os.path.realpath(path) for path in source.files}
+    for pattern in patterns:
+        for index in source.selection:
+            if os.path.realpath(frame_path(pattern, index)) in inputs:
+                raise StippleError(f"{pattern}: frame {index} would overwrite an input frame; choose another name")
+
+
+class VideoOutputs:
+    """A video's outputs, staged as frames come and renamed all at once by ``commit``.
+
+    ``plan`` is ``plan_outputs``'s; ``draw(points, density, fmt)`` makes one frame's bytes of ``fmt`` (``.png``
+    or ``.svg``; ``points`` in unit coordinates of an image of ``shape``, placed from the ``density`` w). The
+    CSV (``frame,x,y`` in pixels, row i of every frame is dot i) and the MP4 are streamed into temporary files
+    beside their targets; each frame pattern's files are staged one by one. Leaving the ``with`` block without
+    ``commit`` removes them all.
+    """
+
+    def __init__(self, plan, shape, draw, fps):
+        self.plan, self.shape, self.draw, self.fps = plan, shape, draw, fps
+        self.staged = StagedOutputs()
+        self.tables, self.movies, self.frames = [], [], 0
+
+    def __enter__(self):
+        self.staged.__enter__()
+        for path in self.plan["csv"]:
+            stream = tempfile.TemporaryFile() if path == "-" else open(self.staged.reserve(path), "wb")
+            stream.write(b"frame,x,y\n")
+            self.tables.append((path, stream))
+        self.movies = [Mp4Stream(self.staged.reserve(path), path, self.fps) for path in self.plan["mp4"]]
+        return self
+
+    def __exit__(self, *exc):
+        self._close()
+        self.staged.__exit__(*exc)
+
+    def add(self, index, points, density):
+        """Stage frame ``index`` (its number in the source): CSV rows, frame files and the MP4's picture."""
+        rows, columns = self.shape
+        pixels = points * np.array([columns, rows])
+        lines = "".join(f"{index},{x:.6f},{y:.6f}\n" for x, y in pixels).encode()
+        for path, stream in self.tables:
+            _write(stream, path, lines)
+        drawn = {}
+        for pattern in self.plan["frames"]:
+            fmt = os.path.splitext(pattern)[1].lower()
+            drawn[fmt] = drawn.get(fmt) or self.draw(points, density, fmt)
+            self.staged.add(frame_path(pattern, index), drawn[fmt])
+        if self.movies:
+            picture = Image.open(io.BytesIO(drawn.get(".png") or self.draw(points, density, ".png")))
+            for movie in self.movies:
+                movie.write(picture)
+        self.frames += 1
+
+    def commit(self):
+        """Finish the CSV and MP4 files, then rename every output over its target (stdout's CSV written first)."""
+        for path, stream in self.tables:
+            if path == "-":
+                stream.seek(0)
+                while chunk := stream.read(1 << 20):
+                    write_stdout(chunk)
+        self._close()
+        self.staged.commit()
+
+    def _close(self):
+        for path, stream in self.tables:
+            if not stream.closed:
+                try:
+                    stream.close()
+                except OSError as error:
+                    raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+        for movie in self.movies:
+            movie.close()
+
+
+def _write(stream, path, data):
+    try:
+        stream.write(data)
+    except OSError as error:
+        raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+
+
+class Mp4Stream:
+    """An H.264 MP4 (MPEG-4 Part 2 where PyAV has no libx264) written frame by frame to ``temporary``.
+
+    Pictures are padded by their edge pixels to even sides (the yuv420p encoding needs them).
+    """
+
+    def __init__(self, temporary, path, fps):
+        self.av = require_av(f"{path}: writing MP4")
+        self.temporary, self.path, self.fps = temporary, path, fps
+        self.container = self.stream = None
+
+    def write(self, picture):
+        rgb = np.asarray(picture.convert("RGB"))
+        rgb = np.pad(rgb, ((0, rgb.shape[0] % 2), (0, rgb.shape[1] % 2), (0, 0)), mode="edge")
+        try:
+            if self.container is None:
+                self._open(rgb.shape)
+            frame = self.av.VideoFrame.from_ndarray(rgb, format="rgb24")
+            self.container.mux(self.stream.encode(frame))
+        except (self.av.FFmpegError, OSError) as error:
+            raise StippleError(f"{self.path}: cannot write the MP4 ({_reason(error)})") from None
+
+    def _open(self, shape):
+        codec = "libx264" if "libx264" in self.av.codecs_available else "mpeg4"
+        self.container = self.av.open(self.temporary, "w", format="mp4")
+        self.stream = self.container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
+        self.stream.height, self.stream.width = shape[:2]
+        self.stream.pix_fmt = "yuv420p"
+        if codec == "libx264":
+            self.stream.options = {"crf": "18"}
+
+    def close(self):
+        if self.container is None:
+            return
+        container, self.container = self.container, None
+        try:
+            container.mux(self.stream.encode(None))
+        except (self.av.FFmpegError, OSError) as error:
+            raise StippleError(f"{self.path}: cannot write the MP4 ({_reason(error)})") from None
+        finally:
+            container.close()
+
+
+CHECKPOINT_FORMAT = "stipple-video-checkpoint"
+CHECKPOINT_VERSION = 1
+MAX_METADATA_BYTES = 1 << 24
+
+
+def save_video_checkpoint(path, points, settings, indices, fingerprints):
+    """Write the finished frames (``points`` of shape ``(K, M, 2)``, their source ``indices`` and density
+    ``fingerprints``) and the run's ``settings`` to ``path`` atomically, as a pickle-free ``.npz``."""
+    metadata = {
+        "format": CHECKPOINT_FORMAT,
+        "version": CHECKPOINT_VERSION,
+        "settings": settings,
+        "indices": [int(index) for index in indices],
+        "fingerprints": list(fingerprints),
+    }
+    buffer = io.BytesIO()
+    np.savez(buffer, metadata=np.asarray(json.dumps(metadata)), points=np.asarray(points, dtype=np.float64))
+    atomic_write(path, buffer.getvalue())
+
+
+def load_video_checkpoint(path, settings):
+    """``(points, indices, fingerprints)`` of a video checkpoint for a run with ``settings``; refuses files that are
+    damaged, foreign, or for other settings. Nothing is unpickled and every member's size is checked first."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            metadata = _checkpoint_metadata(path, _member(path, archive, "metadata", MAX_METADATA_BYTES, "U"))
+            for key, value in settings.items():
+                if metadata["settings"].get(key) != value:
+                    raise StippleError(
+                        f"{path}: checkpoint is for another run: {key} was "
+                        f"{metadata['settings'].get(key)!r}, now {value!r}"
+                    )
+            frames, count = len(metadata["indices"]), settings["points"]
+            points = _member(path, archive, "points", 16 * frames * count, "f").astype(np.float64)
+    except FileNotFoundError:
+        raise StippleError(f"{path}: no checkpoint to resume") from None
+    except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError, RuntimeError) as error:
+        raise StippleError(f"{path}: not a video checkpoint, or damaged ({_reason(error)})") from None
+    if points.shape != (frames, count, 2) or not np.all((points >= 0) & (points <= 1)):
+        raise StippleError(f"{path}: damaged video checkpoint (points of shape {points.shape} or outside [0, 1])")
+    return points, metadata["indices"], metadata["fingerprints"]
+
+
+def _member(path, archive, name, limit, kinds):
+    try:
+        info = archive.getinfo(f"{name}.npy")
+    except KeyError:
+        raise StippleError(f"{path}: not a video checkpoint (no member {name})") from None
+    if info.file_size > limit + 4096:
+        raise StippleError(f"{path}: damaged video checkpoint ({name} holds {info.file_size} bytes)")
+    with archive.open(info) as stream:
+        data = stream.read(limit + 4097)
+    try:
+        return load_array(data, name, kinds=kinds)
+    except StippleError as error:
+        raise StippleError(f"{path}: damaged video checkpoint ({error})") from None
+
+
+def _checkpoint_metadata(path, text):
+    try:
+        metadata = json.loads(str(text[()]))
+    except (TypeError, ValueError, RecursionError):
+        raise StippleError(f"{path}: damaged video checkpoint metadata") from None
+    if not isinstance(metadata, dict) or metadata.get("format") != CHECKPOINT_FORMAT:
+        raise StippleError(f"{path}: not a video checkpoint")
+    if metadata.get("version") != CHECKPOINT_VERSION:
+        raise StippleError(f"{path}: video checkpoint version {metadata.get('version')!r} is not {CHECKPOINT_VERSION}")
+    indices, prints = metadata.get("indices"), metadata.get("fingerprints")
+    valid = isinstance(metadata.get("settings"), dict) and isinstance(indices, list) and isinstance(prints, list)
+    if not valid or len(indices) != len(prints) or not all(isinstance(i, int) for i in indices):
+        raise StippleError(f"{path}: damaged video checkpoint metadata")
+    return metadata

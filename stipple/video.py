@@ -1,0 +1,322 @@
+"""Stippled video: every frame's dots warm-started from the previous frame's, so that dot i stays dot i.
+
+Frame 0 is a cold run, the same as ``stipple torus`` makes of that frame. Every later frame starts from the
+previous frame's points and makes at most ``frame_iterations`` CG iterations on its own problem, without the
+low-frequency correction, moving only the dots near a change: where the darkness, blurred at one dot spacing,
+differs by more than ``change`` from what the dots there were last placed for, and ``free_margin`` spacings
+around it (``free_dots``). The other dots are pinned (``PinnedTorus``): left free, one CG step spreads a local
+change over the whole picture (M = 20000: still dots moved 0.25 of their spacing per frame), and the still
+parts of the video would boil. The measurements that chose these settings are in docs/video.md.
+"""
+
+import os
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt, gaussian_filter
+
+from .errors import StippleError
+from .halftone import check_integer, run
+from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
+from .manifolds import PinnedTorus
+from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
+
+# Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
+# left 4-12 % and the dots' moves in still regions were the same (docs/video.md).
+FRAME_ITERATIONS = 20
+# A warm frame moves the dots within FREE_MARGIN dot spacings of a change in darkness above CHANGE (blurred at one
+# spacing, against the darkness the dots there were placed for); 8-bit noise and compression stay below it.
+CHANGE = 0.02
+FREE_MARGIN = 3.0
+
+
+@dataclass
+class VideoSettings:
+    """What defines a stippled video's optimisation (the keywords of ``torus_problem`` and ``halftone.run``).
+
+    ``init``, ``iterations`` and ``correct`` are frame 0's (its cold run); ``frame_iterations`` caps every later
+    frame's warm-started run, which moves the dots within ``free_margin`` spacings of a change in darkness above
+    ``change`` (``free_dots``). ``tol``, ``settle``, ``time_limit``, ``safeguard`` and ``beta`` apply to every frame.
+    """
+
+    n_points: int
+    bandwidth: object = None
+    backend: str = "ducc0"
+    threads: object = None
+    epsilon: float = DEFAULT_EPSILON
+    hessian: str = "gauss-newton"
+    near_field: bool = True
+    seed: int = 0
+    init: object = "stratified"
+    tol: float = 1e-4
+    settle: object = None
+    iterations: int = 2000
+    frame_iterations: int = FRAME_ITERATIONS
+    change: float = CHANGE
+    free_margin: float = FREE_MARGIN
+    time_limit: object = None
+    correct: bool = True
+    safeguard: bool = False
+    beta: str = "hestenes-stiefel"
+
+
+@dataclass
+class Frame:
+    """One finished frame: its number in the source, its dots (unit coordinates, row i is dot i), the density
+    ``w`` they were placed from (what a tone-true drawing reproduces), and how it was made (``replayed``: read back
+    from a checkpoint, not optimised)."""
+
+    index: int
+    points: object
+    density: object
+    warm: bool
+    replayed: bool
+    iterations: int = 0
+    energy: float = 0.0
+    seconds: float = 0.0
+
+
+@dataclass
+class VideoResult:
+    """``status`` "finished" or "stopped" (by ``stop``), a one-line ``message``, the frames finished and how many
+    of them this run optimised, and the seconds of frame 0's cold run and of the warm frames on average."""
+
+    status: str
+    message: str
+    frames: int
+    optimised: int
+    seconds: float
+    cold_seconds: object = None
+    warm_seconds: object = None
+
+
+def stipple_video(
+    frames,
+    settings,
+    *,
+    on_frame=None,
+    stop=None,
+    checkpoint=None,
+    resume=False,
+    checkpoint_seconds=None,
+    checkpoint_frames=None,
+    identity=None,
+    key=None,
+):
+    """Stipple a sequence of densities with the same dots, each frame warm-started from the previous one.
+
+    Parameters
+    ----------
+    frames : iterable of (int, numpy.ndarray)
+        ``(index, w)`` per frame, in order, every ``w`` of the same shape (``stipple.io.video.FrameSource``).
+    settings : VideoSettings
+    on_frame : callable, optional
+        ``on_frame(Frame)`` after every finished frame (also those replayed from a checkpoint), in order.
+    stop : callable, optional
+        ``stop(state)`` is shown every CG state; True stops the run: the frame under way is dropped and the
+        result's status is "stopped".
+    checkpoint : path, optional
+        Save every finished frame's dots there (atomically) every ``checkpoint_seconds`` or ``checkpoint_frames``
+        and when the run ends. An existing file is refused unless ``resume``.
+    resume : bool
+        Replay the checkpoint's frames (their densities must match) and go on from the last one.
+    identity : dict, optional
+        More settings that define the run (the density's transfer, the frame selection); with the problem's,
+        a checkpoint must match them all.
+    key : (numpy.ndarray, numpy.ndarray), optional
+        ``(points, w)``: a key frame's dots and darkness. The first frame is then warm-started from them, as if
+        it followed the key frame: a long clip split into chunks, each started from one shared key frame,
+        keeps the still dots of every chunk where the key frame put them (docs/video.md).
+
+    Returns
+    -------
+    VideoResult
+    """
+    started = time.perf_counter()
+    check_integer("frame iterations", settings.frame_iterations, 0, 10**6)
+    if key is not None:
+        identity = {**(identity or {}), "key": frame_fingerprint(np.concatenate([np.ravel(k) for k in key]))}
+    keeper = _Keeper(checkpoint, _defining(settings, identity), checkpoint_seconds, checkpoint_frames, resume)
+    previous, bandwidth, timings, status, position = None, settings.bandwidth, [], "finished", -1
+    reference, free = (None, None) if key is None else (key[1], None)
+    previous = None if key is None else key[0]
+    for position, (index, weights) in enumerate(frames):
+        bandwidth = bandwidth or default_bandwidth(settings.n_points, weights)
+        if previous is not None:
+            free, reference = free_dots(previous, reference, weights, settings)
+        frame = keeper.replay(position, index, weights)
+        if frame is None:
+            frame = _optimise(weights, index, previous, free, bandwidth, settings, stop)
+            if frame is None:
+                status = "stopped"
+                break
+            timings.append(frame.seconds)
+            keeper.add(frame, weights)
+        if on_frame is not None:
+            on_frame(frame)
+        previous = frame.points
+        reference = weights if reference is None else reference
+    keeper.finish(status, position + 1)
+    return _result(status, keeper.count, timings, time.perf_counter() - started, cold_first=key is None)
+
+
+def free_dots(points, reference, weights, settings):
+    """The dots a warm frame moves, and the darkness each pixel's dots are then placed for.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        The previous frame's dots, ``(M, 2)`` in unit coordinates.
+    reference : numpy.ndarray
+        The darkness the dots at each pixel were last placed for, ``(H, W)``.
+    weights : numpy.ndarray
+        This frame's darkness, ``(H, W)``.
+    settings : VideoSettings
+        ``n_points``, ``change`` and ``free_margin``.
+
+    Returns
+    -------
+    free : numpy.ndarray of bool, shape (M,)
+        Dots within ``free_margin`` mean dot spacings (distances wrap around, as on the torus) of a pixel whose
+        darkness, blurred at one spacing, differs from ``reference`` by more than ``change``.
+    reference : numpy.ndarray
+        ``weights`` within that margin, ``reference`` elsewhere.
+    """
+    rows, columns = weights.shape
+    spacing = np.sqrt(2 * rows * columns / (np.sqrt(3) * settings.n_points))
+    changed = np.abs(gaussian_filter(weights - reference, spacing, mode="wrap")) > settings.change
+    pad = int(np.ceil(settings.free_margin * spacing)) + 1
+    pr, pc = min(pad, rows), min(pad, columns)
+    distance = distance_transform_edt(np.pad(~changed, ((pr, pr), (pc, pc)), mode="wrap"))[
+        pr : pr + rows, pc : pc + columns
+    ]
+    near = changed.any() & (distance <= settings.free_margin * spacing)
+    j = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
+    i = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
+    return near[i, j], np.where(near, weights, reference)
+
+
+def _optimise(weights, index, previous, free, bandwidth, settings, stop):
+    """Frame ``index``'s dots: a cold run without ``previous`` points, else warm-started from them with only the
+    ``free`` dots moving; None if ``stop`` stopped it."""
+    problem = torus_problem(
+        weights,
+        settings.n_points,
+        bandwidth,
+        backend=settings.backend,
+        threads=settings.threads,
+        epsilon=settings.epsilon,
+        hessian=settings.hessian,
+        near_field=settings.near_field,
+    )
+    warm = previous is not None
+    started = time.perf_counter()
+    if warm and not free.any():
+        return Frame(index, previous, weights, True, False, 0, float("nan"), time.perf_counter() - started)
+    if warm:
+        problem = replace(problem, manifold=PinnedTorus(problem.manifold.scale, free))
+    result = run(
+        problem,
+        init=previous if warm else settings.init,
+        seed=settings.seed,
+        tol=settings.tol,
+        iterations=settings.frame_iterations if warm else settings.iterations,
+        time_limit=settings.time_limit,
+        safeguard=settings.safeguard,
+        beta=settings.beta,
+        settle=settings.settle,
+        callback=stop,
+        correct=settings.correct and not warm,
+    )
+    if result.status == "stopped":
+        return None
+    return Frame(
+        index, result.points, weights, warm, False, result.iterations, result.energy, time.perf_counter() - started
+    )
+
+
+def _defining(settings, identity):
+    """The settings a checkpoint must match: the problem's, the warm frames' cap, the start and the identity."""
+    init = settings.init if isinstance(settings.init, str) else "points"
+    defining = {
+        "points": settings.n_points,
+        "bandwidth": settings.bandwidth,
+        "near_field": bool(settings.near_field),
+        "hessian": settings.hessian,
+        "seed": settings.seed,
+        "init": init,
+        "frame_iterations": settings.frame_iterations,
+        "change": settings.change,
+        "free_margin": settings.free_margin,
+    }
+    return {**defining, **(identity or {})}
+
+
+def _result(status, frames, timings, seconds, cold_first=True):
+    if frames == 0 and status == "finished":
+        raise StippleError("no frame was stippled")
+    cold = timings[0] if cold_first and timings and len(timings) == frames else None
+    warm = timings[1:] if cold is not None else timings
+    average = sum(warm) / len(warm) if warm else None
+    message = f"{frames} frames"
+    if cold is not None:
+        message += f"; frame 0 (cold) {cold:.2f} s"
+    if average is not None:
+        message += f"; warm-started frames {average:.2f} s each"
+    if status == "stopped":
+        message = f"stopped after {message}"
+    return VideoResult(status, message, frames, len(timings), seconds, cold, average)
+
+
+class _Keeper:
+    """The finished frames' dots for the checkpoint: replayed on resume, saved every so often and at the end."""
+
+    def __init__(self, path, settings, seconds, frames, resume):
+        self.path, self.settings, self.seconds, self.every = path, settings, seconds, frames
+        self.points, self.indices, self.fingerprints = [], [], []
+        self.saved = (time.monotonic(), 0)
+        if path is None:
+            if resume:
+                raise StippleError("resume needs a checkpoint file")
+            return
+        if not resume and os.path.exists(path):
+            raise StippleError(f"{path}: checkpoint exists; resume it or remove it first")
+        if resume:
+            points, self.indices, self.fingerprints = load_video_checkpoint(path, settings)
+            self.points = list(points)
+            self.saved = (time.monotonic(), len(self.points))
+
+    @property
+    def count(self):
+        return len(self.indices)
+
+    def replay(self, position, index, weights):
+        """The saved frame at ``position``, checked against the input, or None past the saved frames."""
+        if self.path is None or position >= len(self.points):
+            return None
+        if self.indices[position] != index or self.fingerprints[position] != frame_fingerprint(weights):
+            raise StippleError(f"{self.path}: checkpoint is for another input: frame {index} differs")
+        return Frame(index, self.points[position], weights, position > 0, True)
+
+    def add(self, frame, weights):
+        self.indices.append(frame.index)
+        if self.path is None:
+            return
+        self.points.append(frame.points)
+        self.fingerprints.append(frame_fingerprint(weights))
+        due_time = self.seconds is not None and time.monotonic() - self.saved[0] >= self.seconds
+        due_count = self.every is not None and len(self.points) - self.saved[1] >= self.every
+        if due_time or due_count:
+            self.save()
+
+    def finish(self, status, seen):
+        """Save the finished frames; refuse a finished run that saw fewer frames than the checkpoint holds."""
+        if status == "finished" and seen < len(self.points):
+            raise StippleError(f"{self.path}: checkpoint holds {len(self.points)} frames, the input only {seen}")
+        if self.path is not None and self.points:
+            self.save()
+
+    def save(self):
+        save_video_checkpoint(self.path, self.points, self.settings, self.indices, self.fingerprints)
+        self.saved = (time.monotonic(), len(self.points))

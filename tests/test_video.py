@@ -1,0 +1,195 @@
+"""Stippled video (``stipple.video``, ``stipple video``): coherent dots, checkpoints, outputs and bad inputs."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple import StippleError
+from stipple.cli import main
+from stipple.evaluate import discrepancy_energy
+from stipple.torus import halftone_torus, torus_problem
+from stipple.video import VideoSettings, free_dots, stipple_video
+
+COUNT, BANDWIDTH = 400, 48
+
+
+def moving_disc(frames=6, width=64, height=48):
+    """Gray frames in [0, 1]: a still vertical gradient, a dark disc moving right along its lower quarter."""
+    y, x = np.mgrid[0:height, 0:width] + 0.5
+    clip = []
+    for k in range(frames):
+        cover = np.clip(0.1 * height + 0.5 - np.hypot(x - width * (0.2 + 0.1 * k), y - 0.75 * height), 0, 1)
+        clip.append((0.25 + 0.6 * y / height) * (1 - cover) + 0.05 * cover)
+    return clip
+
+
+def stippled(clip, **options):
+    frames = []
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1, **options.pop("settings", {}))
+    result = stipple_video(enumerate(1 - g for g in clip), settings, on_frame=frames.append, **options)
+    return result, frames
+
+
+def test_still_dots_stay_and_every_frame_is_as_good_as_a_cold_run():
+    clip = moving_disc()
+    result, frames = stippled(clip)
+    assert result.status == "finished" and [f.index for f in frames] == list(range(len(clip)))
+    rows, columns = clip[0].shape
+    spacing = np.sqrt(2 / (np.sqrt(3) * COUNT / (rows * columns)))  # pixels, at the mean density
+    still = lambda points: points[:, 1] * rows < 0.45 * rows  # noqa: E731 (far above the disc's path)
+    for before, after in zip(frames, frames[1:], strict=False):
+        chosen = still(before.points)
+        moves = np.hypot(*((after.points - before.points)[chosen] * [columns, rows]).T) / spacing
+        assert np.median(moves) < 0.05 and np.percentile(moves, 95) < 0.2
+    for frame, gray in zip(frames, clip, strict=True):
+        problem = torus_problem(1 - gray, COUNT, BANDWIDTH, threads=1, near_field=False)
+        cold = halftone_torus(1 - gray, COUNT, BANDWIDTH, threads=1, seed=0).points
+        assert discrepancy_energy(problem, frame.points) < 1.5 * discrepancy_energy(problem, cold)
+
+
+def test_moving_dots_follow_the_disc():
+    clip = moving_disc()
+    _, frames = stippled(clip)
+    rows, columns = clip[0].shape
+    for k in (0, len(clip) - 1):
+        pixels = frames[k].points * [columns, rows]
+        centre = np.array([columns * (0.2 + 0.1 * k), 0.75 * rows])
+        inside = np.hypot(*(pixels - centre).T) < 0.1 * rows
+        assert inside.sum() > 2 * COUNT * np.pi * (0.1 * rows) ** 2 / (rows * columns)  # denser than average
+
+
+def test_a_resumed_run_gives_the_uninterrupted_runs_dots(tmp_path):
+    clip = moving_disc(5)
+    _, whole = stippled(clip)
+    checkpoint = tmp_path / "run.ckpt"
+    seen = []
+
+    def stop_in_frame_three(state):
+        seen.append(state)
+        return len(seen) > 0 and len(done) == 3
+
+    done = []
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1)
+    gray = [1 - g for g in clip]
+    stopped = stipple_video(
+        enumerate(gray), settings, on_frame=done.append, stop=stop_in_frame_three, checkpoint=checkpoint
+    )
+    assert stopped.status == "stopped" and stopped.frames == 3
+    resumed = []
+    result = stipple_video(enumerate(gray), settings, on_frame=resumed.append, checkpoint=checkpoint, resume=True)
+    assert result.status == "finished" and result.optimised == 2
+    assert [f.replayed for f in resumed] == [True, True, True, False, False]
+    for a, b in zip(whole, resumed, strict=True):
+        assert np.array_equal(a.points, b.points)
+    with pytest.raises(StippleError, match="another input"):
+        stipple_video(enumerate([1 - g[::-1] for g in clip]), settings, checkpoint=checkpoint, resume=True)
+
+
+def frames_folder(folder, clip):
+    folder.mkdir()
+    for k, gray in enumerate(clip):
+        Image.fromarray(np.round(gray * 255).astype(np.uint8)).save(folder / f"{k}.png")
+    return folder
+
+
+def video(*args):
+    return CliRunner().invoke(main, ["video", *map(str, args), "-q", "--threads", "1"])
+
+
+def test_a_folder_of_frames_gives_a_csv_with_dot_i_in_row_i_and_tone_true_frames(tmp_path):
+    source = frames_folder(tmp_path / "in", moving_disc(5))
+    (tmp_path / "f").mkdir()
+    result = video(
+        source, "-M", COUNT, "-N", BANDWIDTH, "--step", 2, "-o", tmp_path / "d.csv", "-o", tmp_path / "f/%03d.png"
+    )
+    assert result.exit_code == 0, result.output
+    table = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
+    assert (tmp_path / "d.csv").read_text().startswith("frame,x,y\n")
+    assert list(np.unique(table[:, 0])) == [0, 2, 4] and len(table) == 3 * COUNT
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == ["000.png", "002.png", "004.png"]
+    drawn = np.asarray(Image.open(tmp_path / "f/000.png").convert("L"), float) / 255
+    assert drawn.min() == 0.0  # the dark disc drawn black: tone-true dots overlap where the input is dark
+
+
+def test_the_mp4_plays_with_every_frame(tmp_path):
+    av = pytest.importorskip("av")
+    source = frames_folder(tmp_path / "in", moving_disc(4, 62, 47))
+    result = video(source, "-M", COUNT, "-N", BANDWIDTH, "--png-width", 250, "-o", tmp_path / "out.mp4")
+    assert result.exit_code == 0, result.output
+    with av.open(str(tmp_path / "out.mp4")) as container:
+        decoded = [frame.to_ndarray(format="rgb24") for frame in container.decode(video=0)]
+    assert len(decoded) == 4 and decoded[0].shape[1] == 250 and decoded[0].shape[0] % 2 == 0
+
+
+def test_a_video_file_is_read_frame_by_frame(tmp_path):
+    av = pytest.importorskip("av")
+    clip = moving_disc(4, 64, 48)
+    path = tmp_path / "clip.mp4"
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("mpeg4", rate=12)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        for gray in clip:
+            rgb = np.repeat(np.round(gray * 255).astype(np.uint8)[..., None], 3, axis=2)
+            container.mux(stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")))
+        container.mux(stream.encode(None))
+    result = video(path, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv")
+    assert result.exit_code == 0, result.output
+    assert len(np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)) == 4 * COUNT
+
+
+@pytest.mark.parametrize(
+    "make, outputs, message",
+    [
+        (lambda d: (d / "x.mp4").write_bytes(b"not a video at all") and d / "x.mp4", ["d.csv"], "x.mp4"),
+        (lambda d: (d / "empty").mkdir() or d / "empty", ["d.csv"], "empty"),
+        (lambda d: frames_folder(d / "in", moving_disc(2)), ["frames.png"], "%d"),
+        (lambda d: frames_folder(d / "in", moving_disc(2)), ["d.txt"], "unknown video output"),
+    ],
+    ids=["not-a-video", "no-frames", "pattern-without-%d", "unknown-output"],
+)
+def test_bad_inputs_get_one_line_and_write_nothing(tmp_path, make, outputs, message):
+    source = make(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    result = video(source, "-M", COUNT, *[a for o in outputs for a in ("-o", tmp_path / o)])
+    assert result.exit_code != 0 and message in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_frame_failing_mid_way_leaves_no_output(tmp_path):
+    clip = moving_disc(4)
+    source = frames_folder(tmp_path / "in", clip)
+    Image.new("L", (30, 30)).save(source / "3.png")  # the last frame is of another size
+    (tmp_path / "f").mkdir()
+    result = video(source, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv", "-o", tmp_path / "f/%d.png")
+    assert result.exit_code == 1 and "frame 3 is 30×30 pixels" in result.output
+    assert not (tmp_path / "d.csv").exists() and not list((tmp_path / "f").iterdir())
+
+
+def test_only_dots_near_a_change_are_free_and_the_margin_wraps_around():
+    settings = VideoSettings(n_points=1200, change=0.02, free_margin=3.0)
+    rows, columns = 40, 60
+    spacing = np.sqrt(2 * rows * columns / (np.sqrt(3) * 1200))  # 1.41 pixels
+    reference = np.full((rows, columns), 0.5)
+    weights = reference.copy()
+    weights[18:22, 0:3] = 1.0  # a change at the left edge
+    y, x = np.mgrid[0:rows, 0:columns] + 0.5
+    points = np.column_stack([x.ravel() / columns, y.ravel() / rows])
+    free, updated = free_dots(points, reference, weights, settings)
+    distance = np.hypot(np.minimum(np.abs(x - 1.5), columns - np.abs(x - 1.5)), np.abs(y - 20)).ravel()
+    assert free[distance < 3].all() and not free[distance > 3 + 3 * spacing + 4].any()
+    assert free[(x.ravel() > columns - 3) & (np.abs(y.ravel() - 20) < 2)].all()  # across the wrap
+    assert np.array_equal(updated.ravel()[free], weights.ravel()[free])
+    assert np.array_equal(updated.ravel()[~free], reference.ravel()[~free])
+    unchanged, _ = free_dots(points, reference, reference + 0.01, settings)  # below the change threshold
+    assert not unchanged.any()
+
+
+def test_an_unchanged_frame_keeps_every_dot_and_a_key_frame_starts_a_chunk():
+    clip = moving_disc(3)
+    _, frames = stippled([clip[0], clip[0], clip[1]])
+    assert frames[1].iterations == 0 and np.array_equal(frames[1].points, frames[0].points)
+    assert not np.array_equal(frames[2].points, frames[1].points)
+    _, chunk = stippled([clip[1]], key=(frames[1].points, 1 - clip[0]))
+    assert chunk[0].warm and np.array_equal(chunk[0].points, frames[2].points)
