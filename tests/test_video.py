@@ -122,17 +122,21 @@ def test_the_mp4_plays_with_every_frame(tmp_path):
     assert len(decoded) == 4 and decoded[0].shape[1] == 250 and decoded[0].shape[0] % 2 == 0
 
 
-def test_a_video_file_is_read_frame_by_frame(tmp_path):
+def write_mp4(path, clip):
     av = pytest.importorskip("av")
-    clip = moving_disc(4, 64, 48)
-    path = tmp_path / "clip.mp4"
     with av.open(str(path), "w") as container:
         stream = container.add_stream("mpeg4", rate=12)
-        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.height, stream.width = clip[0].shape
+        stream.pix_fmt = "yuv420p"
         for gray in clip:
             rgb = np.repeat(np.round(gray * 255).astype(np.uint8)[..., None], 3, axis=2)
             container.mux(stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")))
         container.mux(stream.encode(None))
+    return path
+
+
+def test_a_video_file_is_read_frame_by_frame(tmp_path):
+    path = write_mp4(tmp_path / "clip.mp4", moving_disc(4, 64, 48))
     result = video(path, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv")
     assert result.exit_code == 0, result.output
     assert len(np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)) == 4 * COUNT
@@ -193,3 +197,20 @@ def test_an_unchanged_frame_keeps_every_dot_and_a_key_frame_starts_a_chunk():
     assert not np.array_equal(frames[2].points, frames[1].points)
     _, chunk = stippled([clip[1]], key=(frames[1].points, 1 - clip[0]))
     assert chunk[0].warm and np.array_equal(chunk[0].points, frames[2].points)
+
+
+def test_a_file_without_a_decodable_video_stream_gets_one_line(tmp_path):
+    av = pytest.importorskip("av")
+    audio = tmp_path / "audio.mp4"
+    with av.open(str(audio), "w") as container:
+        stream = container.add_stream("aac", rate=8000)
+        frame = av.AudioFrame.from_ndarray(np.zeros((1, 1024), dtype=np.float32), format="fltp", layout="mono")
+        frame.sample_rate = 8000
+        for packet in [*stream.encode(frame), *stream.encode(None)]:
+            container.mux(packet)
+    truncated = tmp_path / "truncated.mp4"
+    truncated.write_bytes(write_mp4(tmp_path / "clip.mp4", moving_disc(2)).read_bytes()[:200])
+    for path, message in ((audio, "no video stream"), (truncated, "not a video PyAV can read")):
+        result = video(path, "-M", COUNT, "-o", tmp_path / "d.csv")
+        assert result.exit_code == 1 and message in result.output and len(result.output.splitlines()) == 1
+    assert not (tmp_path / "d.csv").exists()
