@@ -19,12 +19,12 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import HalftoneResult, Problem, check_count, check_positive, run
+from .line_start import MIN_CURVE_VERTICES, closed_length, initial_loop, moore_index, resample_closed
 from .manifolds import Rectangle
 from .nearfield import NearField, TorusPairs
 from .objective import SumObjective
-from .sampling import hilbert_index, sample_image
+from .sampling import hilbert_index
 from .torus import check_weights, torus_near_kernel, torus_problem, torus_scale
-from .tours import two_opt
 
 # Default length: L = LENGTH_FACTOR sqrt(M W H) pixels, so that the vertex spacing h = L/M is 0.75**2 of the mean
 # stroke spacing W H / L. Measured at M = 20000, drawn 1 px wide (PSNR at sigma 2 / 4 px): the portrait 25.5/37.0 dB
@@ -42,8 +42,6 @@ INITIAL_PENALTY = 1e-7
 # Iterations of the first phase; each later phase runs a quarter as many.
 LINE_ITERATIONS = 400
 MAX_PHASES = 8
-MIN_CURVE_VERTICES = 4
-INITIAL_TOURS = 6
 # White margin around the image on the line's torus, in mean stroke spacings (see ``Rectangle``); measured on the
 # portrait, 2 pixels, 4 and 12 spacings gave the same PSNR within 0.2 dB.
 MARGIN_SPACINGS = 2.0
@@ -252,46 +250,6 @@ def penalty_scale(discrepancy, n_vertices):
     return float(discrepancy.weight**2 * n_vertices)
 
 
-def closed_length(points):
-    return float(np.sum(np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)))
-
-
-def resample_closed(points, count):
-    """``count`` points equally spaced by arclength along the closed polygon through ``points``."""
-    closed = np.vstack([points, points[:1]])
-    cumulative = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
-    targets = np.arange(count) * cumulative[-1] / count
-    return np.stack([np.interp(targets, cumulative, closed[:, axis]) for axis in range(2)], axis=1)
-
-
-def hilbert_tour(weights, count, rng):
-    """``count`` density samples (pixel units) in Hilbert-curve order: a closed loop through the image."""
-    rows, columns = weights.shape
-    samples = sample_image(weights, rng, count) * np.array([columns, rows])
-    cells = np.minimum((samples / max(rows, columns) * (1 << 16)).astype(np.int64), (1 << 16) - 1)
-    return samples[np.argsort(hilbert_index(cells[:, 0], cells[:, 1]), kind="stable")]
-
-
-def initial_loop(weights, n_vertices, length, rng):
-    """A closed loop of ``n_vertices`` equally spaced vertices (unit coordinates) of length about ``length`` px.
-
-    A Hilbert-curve tour through density samples, shortened by 2-opt (which removes the curve's closing jump
-    along the top edge and its crossings), with as many samples as make the tour about ``length`` long (a tour's
-    length grows like the square root of its samples), resampled by arclength.
-    """
-    rows, columns = weights.shape
-    count = max(MIN_CURVE_VERTICES, n_vertices // 4)
-    best = None
-    for _ in range(INITIAL_TOURS):
-        tour = hilbert_tour(weights, count, rng)
-        loop = resample_closed(tour[two_opt(tour)], n_vertices)
-        ratio = length / closed_length(loop)
-        if best is None or abs(np.log(ratio)) < abs(np.log(best[1])):
-            best = (loop, ratio)
-        count = int(np.clip(count * ratio**2, MIN_CURVE_VERTICES, 8 * n_vertices))
-    return best[0] / np.array([columns, rows])
-
-
 def segment_ratio(problem, points):
     """``max |p_{i+1} - p_i|`` over the allowed ``h`` and over the mean segment, at ``points``."""
     problem.speed.set_points(points)
@@ -436,4 +394,13 @@ def line_points(points):
     return np.clip(points, 0.0, 1.0)
 
 
-__all__ = ["HalftoneResult", "draw_line", "line_problem"]
+__all__ = [
+    "HalftoneResult",
+    "closed_length",
+    "draw_line",
+    "hilbert_index",
+    "initial_loop",
+    "line_problem",
+    "moore_index",
+    "resample_closed",
+]

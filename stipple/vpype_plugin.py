@@ -1,4 +1,7 @@
-"""vpype plug-in: ``vpype stipple IMAGE ... write out.svg`` puts one layer of pen paths per ink in the document.
+"""vpype plug-ins: ``vpype stipple IMAGE ... write out.svg`` puts one layer of pen paths per ink in the document;
+``vpype stippleline IMAGE ...`` one layer holding the image drawn as one closed line (``stipple line``). The second
+is not called ``line``: vpype's own ``line X0 Y0 X1 Y1`` draws a segment, and a plug-in of that name would
+replace it.
 
 Installed with ``pip install 'stipple[plotter]'`` (vpype registers it through the ``vpype.plugins`` entry
 point). Lengths follow vpype's conventions (``200mm``, ``8in``; bare numbers are CSS pixels); layers get the
@@ -13,6 +16,7 @@ import vpype_cli
 from .colour import halftone_colour, parse_palette
 from .drawing import flat_dots
 from .errors import StippleError
+from .line import LINE_ITERATIONS
 from .plotter import DOT_STYLES, dot_paths
 
 
@@ -77,3 +81,46 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
 
 
 stipple.help_group = "Plugins"
+
+
+def line_path(image, n_vertices, *, width, length=None, invert=False, **options):
+    """The closed line through ``image`` as complex vertices in CSS pixels (closed: the first repeated last), and
+    the page height; ``options`` go to ``stipple.line.draw_line``."""
+    from .io.images import load_density
+    from .line import draw_line, line_points
+
+    weights = load_density(image, invert=invert)
+    rows, columns = weights.shape
+    result = draw_line(weights, n_vertices, length, **options)
+    pixels = line_points(result.points) * np.array([columns, rows]) * (width / columns)
+    path = pixels[:, 0] + 1j * pixels[:, 1]
+    return np.append(path, path[:1]), rows * width / columns
+
+
+@click.command("stippleline")
+@click.argument("image", type=click.Path(exists=True, dir_okay=False))
+@click.option("-M", "--vertices", "n_vertices", type=vpype_cli.IntegerType(), default=10000, show_default=True)
+@click.option("--length", type=float, default=None, help="Line length in input pixels (default: from M and image).")
+@click.option("-w", "--width", type=vpype_cli.LengthType(), default="200mm", show_default=True, help="Image width.")
+@click.option("--pen-width", type=vpype_cli.LengthType(), default="0.3mm", show_default=True)
+@click.option("--invert", is_flag=True, help="Draw the light parts (a light drawing on dark paper).")
+@click.option("--iterations", type=vpype_cli.IntegerType(), default=LINE_ITERATIONS, show_default=True)
+@click.option("--seed", type=vpype_cli.IntegerType(), default=0, show_default=True)
+@vpype_cli.global_processor
+def stippleline(document, image, n_vertices, width, pen_width, **options):
+    """Draw IMAGE as one closed line in one new layer (the image's top-left corner at the origin)."""
+    try:
+        path, height = line_path(image, n_vertices, width=width, **options)
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    layer_id = document.free_id()
+    document.add(vp.LineCollection([path]), layer_id)
+    layer = document.layers[layer_id]
+    layer.set_property(vp.METADATA_FIELD_NAME, "line")
+    layer.set_property(vp.METADATA_FIELD_COLOR, vp.Color(0, 0, 0))
+    layer.set_property(vp.METADATA_FIELD_PEN_WIDTH, pen_width)
+    document.extend_page_size((width, height))
+    return document
+
+
+stippleline.help_group = "Plugins"

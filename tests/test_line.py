@@ -1,8 +1,11 @@
 """One-line drawings: the curve objective's derivatives, the constraints, the curve near field, the drawing."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import gradient_taylor_slope, hessian_taylor_slope
+from PIL import Image
 
 from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import (
@@ -13,11 +16,15 @@ from stipple.line import (
     hilbert_index,
     initial_loop,
     line_problem,
+    moore_index,
     resample_closed,
 )
+from stipple.line_start import moore_tour
 from stipple.objective import SumObjective
+from stipple.tours import two_opt
 
 STEPS = np.logspace(-2.5, -4, 6)
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def small_line(rng, hessian="full", penalty=3.0):
@@ -108,6 +115,32 @@ def test_hilbert_index_visits_neighbouring_cells_in_turn():
     assert np.all(steps == 1)
 
 
+@pytest.mark.parametrize("order", [1, 2, 3, 5])
+def test_moore_index_is_a_closed_walk_through_every_cell(order):
+    """Every cell once, each next to the one before, and the last next to the first (the closing step)."""
+    side = 1 << order
+    y, x = np.divmod(np.arange(side * side), side)
+    index = moore_index(x, y, order=order)
+    assert sorted(index) == list(range(side * side))
+    walk = np.argsort(index)
+    steps = np.abs(x[walk] - np.roll(x[walk], -1)) + np.abs(y[walk] - np.roll(y[walk], -1))
+    assert np.all(steps == 1)
+
+
+@pytest.mark.parametrize("shape", [(64, 64), (24, 96), (96, 24)])
+def test_start_tour_closes_without_a_long_jump(rng, shape):
+    """The cause of the portrait's wire along its top edge: a Hilbert-order tour closes with a jump the length
+    of the image's side, which 2-opt cannot remove and which resampling turned into a straight run of vertices.
+    The Moore-order tour's longest step stays a few sample spacings long, on square, wide and tall images."""
+    weights = np.full(shape, 0.5)
+    tour = moore_tour(weights, 3000, rng)
+    tour = tour[two_opt(tour)]
+    steps = np.linalg.norm(np.roll(tour, -1, axis=0) - tour, axis=1)
+    spacing = np.sqrt(weights.size / 3000)
+    assert steps.max() < 6 * spacing
+    assert steps.max() < 0.1 * max(shape)
+
+
 def test_resample_closed_spaces_points_equally_along_a_square():
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     points = resample_closed(square, 16)
@@ -178,3 +211,51 @@ def test_line_inks_the_rows_along_every_edge():
     }
     assert np.count_nonzero(rows > 38) == pytest.approx(expected["bottom"], rel=0.25)
     assert np.count_nonzero(rows < 2) == pytest.approx(expected["top"], rel=0.5)
+
+
+def small_test_images():
+    """Small square, wide, dark and silhouette images (the samples and a disc), as densities."""
+
+    def sample(name, size, box=None):
+        image = Image.open(ROOT / "samples" / name).convert("L")
+        image = image.crop(box) if box else image
+        return 1 - np.asarray(image.resize(size, Image.Resampling.LANCZOS), dtype=float) / 255
+
+    y, x = np.mgrid[:64, :64]
+    return {
+        "portrait": sample("astronaut256.png", (64, 64)),
+        "camera": sample("camera128.png", (64, 64)),
+        "wide": sample("astronaut256.png", (96, 40), (0, 80, 256, 187)),
+        "dark": 1 - (1 - sample("camera128.png", (64, 64))) ** 2.2,
+        "silhouette": 0.02 + 0.95 * ((x - 32) ** 2 + (y - 32) ** 2 < 20**2),
+    }
+
+
+def border_bands(weights, pixels, band):
+    """Per edge: the share of the vertices within ``band`` pixels of it, and the image's share of darkness there."""
+    rows, columns = weights.shape
+    width = int(np.ceil(band))
+    x, y = pixels[:, 0], pixels[:, 1]
+    total = weights.sum()
+    return {
+        "top": (np.mean(y < band), weights[:width].sum() / total),
+        "bottom": (np.mean(y > rows - band), weights[-width:].sum() / total),
+        "left": (np.mean(x < band), weights[:, :width].sum() / total),
+        "right": (np.mean(x > columns - band), weights[:, -width:].sum() / total),
+    }
+
+
+@pytest.mark.parametrize("name", ["portrait", "camera", "wide", "dark", "silhouette"])
+def test_line_runs_along_no_edge_the_image_does_not_darken(name):
+    """Within one stroke spacing ``W H / L`` of each edge the line has at most 1.25 times (plus 3 vertices) the
+    share of the vertices that the image's darkness there warrants, and its segments are equal to 5 %."""
+    weights = small_test_images()[name]
+    count = 1000
+    result = draw_line(weights, count, iterations=150, seed=0, threads=1)
+    rows, columns = weights.shape
+    pixels = result.points * np.array([columns, rows])
+    spacing = weights.size / result.problem.length
+    for edge, (line_share, dark_share) in border_bands(weights, pixels, spacing).items():
+        assert line_share <= 1.25 * dark_share + 3 / count, edge
+    segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
+    assert segments.max() <= 1.05 * segments.mean()

@@ -80,3 +80,39 @@ def test_line_bad_input(ramp_path, tmp_path, args, message, monkeypatch):
     monkeypatch.chdir(tmp_path)
     result = run(["line", ramp_path, "--iterations", 2, "-q"] + args)
     assert result.exit_code == 1 and message in result.output, result.output
+
+
+def test_vpype_reads_the_line_svg_as_one_closed_pen_path(ramp_path, tmp_path):
+    """The SVG a plotter gets: one layer, one closed path through the CSV's vertices in physical units, one pen."""
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    csv, svg = tmp_path / "line.csv", tmp_path / "line.svg"
+    args = ["line", ramp_path, "-M", 300, "--iterations", 40, "-q", "--width", "120mm", "--pen-width", "0.4mm"]
+    assert run(args + ["-o", csv, "-o", svg]).exit_code == 0
+    document = vpype.read_multilayer_svg(str(svg), quantization=0.01)
+    (layer,) = document.layers.values()
+    (path,) = layer
+    millimetre = vpype.convert_length("1mm")
+    assert layer.property(vpype.METADATA_FIELD_PEN_WIDTH) == pytest.approx(0.4 * millimetre, rel=1e-3)
+    assert document.page_size == pytest.approx((120 * millimetre, 80 * millimetre), rel=1e-4)
+    table = np.loadtxt(csv, delimiter=",", skiprows=1) * (120 * millimetre / 48)
+    assert len(path) == 301 and path[0] == path[-1]
+    np.testing.assert_allclose(np.column_stack([path.real, path.imag])[:-1], table, atol=0.02)
+
+
+def test_vpype_stippleline_adds_one_closed_line_in_page_units(ramp_path):
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    document = vpype_cli.execute(f"stippleline -M 300 --iterations 40 --width 96mm --pen-width 0.5mm {ramp_path}")
+    (layer,) = document.layers.values()
+    (path,) = layer
+    millimetre = vpype.convert_length("1mm")
+    assert layer.property(vpype.METADATA_FIELD_NAME) == "line"
+    assert layer.property(vpype.METADATA_FIELD_PEN_WIDTH) == pytest.approx(0.5 * millimetre)
+    assert document.page_size == pytest.approx((96 * millimetre, 64 * millimetre))
+    assert len(path) == 301 and path[0] == path[-1]
+    assert path.real.min() >= 0 and path.real.max() <= 96 * millimetre
+    assert path.imag.min() >= 0 and path.imag.max() <= 64 * millimetre
+    segments = np.abs(np.diff(path))
+    assert segments.max() <= 1.05 * segments.mean()
+    assert np.sum(path.real < 48 * millimetre) > 2 * np.sum(path.real >= 48 * millimetre)  # dark on the left

@@ -6,18 +6,24 @@ from .units import WHITE, hex_colour
 
 
 def line_svg_bytes(pixels, size, physical_width, pen_width, comment=""):
-    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide, unfilled."""
+    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide, unfilled.
+
+    The path sits in one Inkscape layer named "line" whose group carries the stroke, so ``vpype read`` and
+    plotter software see one pen of that width; the page is ``physical_width`` wide (user units: input pixels).
+    """
     width, height = size
     value, unit = physical_width
     points = " ".join(f"{x:.3f},{y:.3f}" for x, y in pixels)
     return "\n".join(
         [
             '<?xml version="1.0" encoding="UTF-8"?>',
-            f'<svg xmlns="http://www.w3.org/2000/svg" width="{value:g}{unit}" '
-            f'height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
+            '<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
+            f'width="{value:g}{unit}" height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
             f"<!-- {comment} -->" if comment else "",
-            f'<path fill="none" stroke="black" stroke-width="{pen_width:.4f}" stroke-linejoin="round" '
-            f'd="M {points} Z"/>',
+            f'<g id="layer1" inkscape:groupmode="layer" inkscape:label="1-line" fill="none" stroke="black" '
+            f'stroke-width="{pen_width:.4f}" stroke-linecap="round" stroke-linejoin="round">',
+            f'<path d="M {points} Z"/>',
+            "</g>",
             "</svg>\n",
         ]
     ).encode()
