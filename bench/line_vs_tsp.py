@@ -3,7 +3,8 @@
 For each image: ``stipple.draw_line`` with M vertices, and ``stipple torus`` dots (M of them, CLI defaults) toured
 by LKH-3 (``elkai``, an optional benchmark dependency: ``pip install elkai``). Both closed lines are drawn 1 px
 wide at the image's resolution, blurred (sigma 2 and 4 px) and scaled by least squares onto the blurred density
-(``stipple.evaluate.fitted_similarity``). Prints one JSON object per image.
+(``stipple.evaluate.fitted_similarity``). Prints one JSON object per image, with the line's share of vertices
+within one stroke spacing of each edge against the image's share of darkness there.
 
     python bench/line_vs_tsp.py [IMAGE ...] [-M 20000] [--size 256] [--iterations 400] [--png DIR]
 """
@@ -50,6 +51,23 @@ def load(path, size):
     return 1 - np.asarray(image, dtype=np.float64) / 255
 
 
+def border_shares(weights, pixels, length):
+    """Per edge: the share of the line's vertices within one stroke spacing ``W H / L`` of it, and the share of
+    the image's darkness there (what a line that follows the darkness would put there)."""
+    rows, columns = weights.shape
+    band = weights.size / length
+    width = int(np.ceil(band))
+    x, y = pixels[:, 0], pixels[:, 1]
+    total = weights.sum()
+    shares = {
+        "top": (np.mean(y < band), weights[:width].sum() / total),
+        "bottom": (np.mean(y > rows - band), weights[-width:].sum() / total),
+        "left": (np.mean(x < band), weights[:, :width].sum() / total),
+        "right": (np.mean(x > columns - band), weights[:, -width:].sum() / total),
+    }
+    return {edge: [round(float(a), 4), round(float(b), 4)] for edge, (a, b) in shares.items()}
+
+
 def compare(path, count, size, iterations, png_dir):
     weights = load(path, size)
     scale = np.array([weights.shape[1], weights.shape[0]])
@@ -78,6 +96,7 @@ def compare(path, count, size, iterations, png_dir):
         iterations=int(line.iterations),
         penalty=line.problem.settings["penalty"],
         max_over_mean_segment=round(float(segments.max() / segments.mean()), 4),
+        border_line_and_darkness_shares=border_shares(weights, line_pixels, loop_length(line_pixels)),
         min_over_mean_segment=round(float(segments.min() / segments.mean()), 4),
     )
     report["tsp"].update(dots_seconds=round(dots_seconds, 1), tour_seconds=round(tour_seconds, 1))
