@@ -7,7 +7,7 @@ from PIL import Image
 
 from stipple.cli import main
 
-COMMANDS = ("colour", "design", "evaluate", "line", "render", "sphere", "torus", "video")
+COMMANDS = ("batch", "colour", "design", "evaluate", "line", "render", "sphere", "torus", "video")
 
 
 def run(args):
@@ -47,6 +47,7 @@ def tiny_runs(image, folder):
         "render": ["render", dots, "--like", image, "-o", folder / "r.png"],
         "evaluate": ["evaluate", dots, image, "--json", folder / "e.json"],
         "video": ["video", folder / "in.p?g", "-M", 50, "-N", 12, "--iterations", 3, "-o", folder / "v.csv"],
+        "batch": ["batch", image, "-M", 50, "-N", 12, "--iterations", 3, "-d", folder, "--format", "csv"],
     }
 
 
@@ -57,6 +58,7 @@ def test_one_tiny_run_per_command(image, tmp_path):
         result = run([*args, "-q"] if command not in ("evaluate",) else args)
         assert result.exit_code == 0, f"{command}: {result.output}"
         written = args[args.index("--json") + 1] if command == "evaluate" else args[-1]
+        written = tmp_path / "in.csv" if command == "batch" else written
         assert written.stat().st_size > 0, command
     assert np.loadtxt(tmp_path / "dots.csv", delimiter=",", skiprows=1).shape == (60, 2)
     assert (tmp_path / "c.csv").read_text().startswith("x,y,layer\n")

@@ -12,6 +12,7 @@ import click
 
 from .. import __version__
 from ..allocator import reuse_freed_memory
+from .batch import batch
 from .colour import colour
 from .design import design
 from .evaluate import evaluate
@@ -70,5 +71,5 @@ def main():
     """Halftoning by discrepancy minimisation on the torus (images) and the sphere (global maps)."""
 
 
-for command in (torus, sphere, colour, line, design, evaluate, render, video):
+for command in (torus, sphere, colour, line, design, evaluate, render, video, batch):
     main.add_command(command)

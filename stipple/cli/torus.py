@@ -5,10 +5,10 @@ import time
 import click
 import numpy as np
 
+from ..batch import TorusRecipe, draw_image, image_problem
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..io.images import load_input
-from ..io.png import check_png_outputs
 from ..io.points import read_torus_init
 from ..plotter import physical_centres
 from ..transforms import BACKENDS
@@ -52,9 +52,6 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 def torus(ctx, image, **options):
     """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus; with --palette, one
     layer of dots per ink (as 'stipple colour')."""
-    from ..io.writers import torus_output
-    from ..torus import DEFAULT_EPSILON, torus_problem
-
     started = time.perf_counter()
     image = resolve_input(ctx, image)
     if image is None:
@@ -64,47 +61,56 @@ def torus(ctx, image, **options):
 
         return run_colour(image, options, started)
     try:
-        settings = render_settings(options)
+        recipe = torus_recipe(options)
+        width = recipe.draw["width"]
         inputs = [("image", image), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
-            weights = load_input(
-                image,
-                invert=options["invert"],
-                gamma=options["gamma"],
-                value_range=options["value_range"],
-                levels=parse_levels(options["levels"]),
-            )
+            weights = load_input(image, **recipe.load)
             tone_hints(weights, options)
-            check_png_outputs(
-                [output_format(path) for path in options["outputs"]],
-                weights.shape[::-1],
-                options["png_width"],
-                options["n_points"],
-            )
-            problem = torus_problem(
-                weights,
-                options["n_points"],
-                options["bandwidth"],
-                backend=options["backend"],
-                threads=options["threads"],
-                epsilon=DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
-                hessian=options["hessian"],
-                near_field=options["near_field"] is not False,
-            )
+            problem = image_problem(weights, [output_format(path) for path in options["outputs"]], recipe)
             result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
-            points = plot_order(
-                physical_centres(result.points, weights.shape, settings["width"]),
-                result.points,
-                options,
-                settings["width"][1],
-            )
-            write_outputs(
-                options["outputs"],
-                lambda fmt: torus_output(points, weights.shape, fmt, darkness=weights, **settings),
-            )
+            points = plot_order(physical_centres(result.points, weights.shape, width), result.points, options, width[1])
+            write_outputs(options["outputs"], lambda fmt: draw_image(points, weights, [fmt], recipe)[fmt])
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+def torus_recipe(options):
+    """What ``stipple torus`` does to an image with these options, as a ``stipple.batch.TorusRecipe`` (the
+    run's stopping, checkpoint and progress options are ``solve``'s)."""
+    from ..torus import DEFAULT_EPSILON
+
+    return TorusRecipe(
+        load={
+            "invert": options["invert"],
+            "gamma": options["gamma"],
+            "value_range": options["value_range"],
+            "levels": parse_levels(options["levels"]),
+        },
+        problem={
+            "n_points": options["n_points"],
+            "bandwidth": options["bandwidth"],
+            "backend": options["backend"],
+            "threads": options["threads"],
+            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+            "hessian": options["hessian"],
+            "near_field": options["near_field"] is not False,
+        },
+        solve={
+            "init": options["init"],
+            "seed": options["seed"],
+            "tol": options["tol"],
+            "iterations": options["iterations"],
+            "time_limit": options["time_limit"],
+            "safeguard": options["safeguard"],
+            "beta": options["beta"],
+            "correct": options["correct"],
+            "settle": options["settle"],
+        },
+        draw=render_settings(options),
+        order=bool(options["order"]),
+    )
 
 
 # Hints on stderr, never a silent change: a faint document (its gray values span less than this) and a mostly

@@ -1,0 +1,331 @@
+"""Batches of images: each stippled exactly as ``stipple torus`` would, written as ``DIR/<stem>.<ext>``, one after
+the other here or one task per image on a Dask distributed cluster.
+
+``stipple_image`` is the one path from an image to its outputs' bytes; ``run_job`` writes one image's outputs
+all-or-nothing (temporary files beside them, then renamed), so that every output file that exists is whole.
+An image is *done* when all its outputs exist and none is older than the image (``is_done``): a rerun of a batch
+skips those and redoes the rest, including the image a killed worker was working on.
+"""
+
+import os
+import stat
+import time
+import uuid
+from dataclasses import dataclass, field
+
+from .errors import StippleError
+from .halftone import run
+from .io.commit import commit_outputs
+from .io.images import load_input
+from .io.png import check_png_outputs
+from .io.points import read_torus_init
+from .io.safety import check_distinct
+from .plotter import physical_centres, plotter_order
+
+FORMATS = ("csv", "png", "svg")
+# Exit status of a batch in which some images failed: FAILED_BASE + the number failed, at most FAILED_BASE +
+# FAILED_CAP (101-125): above 1 (bad data) and 2 (bad usage), below 126-127 (the shell's) and 128 + signal.
+FAILED_BASE, FAILED_CAP = 100, 25
+# Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT = 10
+
+
+@dataclass(frozen=True)
+class TorusRecipe:
+    """What ``stipple torus`` does to one image, as plain keyword dictionaries (picklable, for remote workers).
+
+    Attributes
+    ----------
+    load : dict
+        Keywords of ``stipple.io.images.load_input`` (invert, gamma, value_range, levels).
+    problem : dict
+        Keywords of ``stipple.torus.torus_problem`` after the weights: n_points, bandwidth, backend, threads,
+        epsilon, hessian, near_field.
+    solve : dict
+        Keywords of ``stipple.halftone.run`` (init as "stratified", "density" or "uniform", seed, tol, iterations,
+        time_limit, safeguard, beta, correct, settle).
+    draw : dict
+        Keywords of ``stipple.io.writers.torus_output`` (width, dot_radius, png_width, background, color,
+        dot_style, pen_width, style).
+    order : bool
+        Reorder the dots along a short pen path (``--order``).
+    """
+
+    load: dict = field(default_factory=dict)
+    problem: dict = field(default_factory=dict)
+    solve: dict = field(default_factory=dict)
+    draw: dict = field(default_factory=dict)
+    order: bool = False
+
+
+@dataclass
+class ImageOutputs:
+    """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
+    optimiser's ``HalftoneResult``."""
+
+    files: dict
+    result: object
+
+
+def stipple_image(image, formats, recipe, callback=None):
+    """Stipple ``image`` (a path) as ``stipple torus`` does and draw it in every format of ``formats``.
+
+    Parameters
+    ----------
+    image : str
+        Path of the image (PNG, JPEG, ..., or a .npy map).
+    formats : iterable of str
+        Output formats with their dot: ".csv", ".png", ".svg".
+    recipe : TorusRecipe
+    callback : callable, optional
+        ``callback(state)`` after every CG iteration; returning True stops the run (``stipple.optimize``).
+
+    Returns
+    -------
+    ImageOutputs
+    """
+    formats = list(formats)
+    weights = load_input(image, **recipe.load)
+    problem = image_problem(weights, formats, recipe)
+    solve_options = dict(recipe.solve)
+    init = read_torus_init(solve_options.pop("init", "stratified"), weights.shape)
+    result = run(problem, init=init, callback=callback, **solve_options)
+    points = pen_order(result.points, weights.shape, recipe) if recipe.order else result.points
+    return ImageOutputs(draw_image(points, weights, formats, recipe), result)
+
+
+def image_problem(weights, formats, recipe):
+    """The torus problem of the density ``weights`` with ``recipe.problem``'s settings, once the PNG canvas that
+    ``formats`` need is known to fit in memory."""
+    from .torus import torus_problem
+
+    settings = dict(recipe.problem)
+    n_points = settings.pop("n_points")
+    check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
+    return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
+
+
+def pen_order(points, shape, recipe):
+    """``points`` reordered along a short pen path on the drawing's physical canvas."""
+    order, _, _ = plotter_order(physical_centres(points, shape, recipe.draw.get("width", (200.0, "mm"))))
+    return points[order]
+
+
+def draw_image(points, weights, formats, recipe):
+    """{format: bytes} of torus ``points`` placed from the density ``weights``, drawn with ``recipe.draw``."""
+    from .io.writers import torus_output
+
+    return {fmt: torus_output(points, weights.shape, fmt, darkness=weights, **recipe.draw) for fmt in formats}
+
+
+@dataclass(frozen=True)
+class BatchJob:
+    """One image of a batch: its absolute path, its outputs as ``(format, absolute path)`` pairs, what to do to
+    it, and its name as given (in messages)."""
+
+    image: str
+    outputs: tuple
+    recipe: TorusRecipe
+    name: str = ""
+
+
+@dataclass
+class BatchOutcome:
+    """What became of one image: ``status`` "done", "skipped" (its outputs existed) or "failed"; ``message``
+    says why it failed or how its run stopped."""
+
+    image: str
+    status: str
+    message: str = ""
+    seconds: float = 0.0
+    iterations: int = 0
+    energy: float = float("nan")
+
+
+def parse_formats(text):
+    """``"csv,png,svg"`` -> ``(".csv", ".png", ".svg")`` in the order given, each once."""
+    names = [part.strip().lower().lstrip(".") for part in str(text).split(",") if part.strip()]
+    unknown = [name for name in names if name not in FORMATS]
+    if not names or unknown:
+        raise StippleError(f"format must be a comma-separated list of {', '.join(FORMATS)}, not {text!r}")
+    return tuple(f".{name}" for name in dict.fromkeys(names))
+
+
+def plan_batch(images, out_dir, formats, recipe):
+    """The jobs of a batch, checked before any work.
+
+    Raises
+    ------
+    StippleError
+        If an image is stdin or a directory, two images share a stem (compared ignoring case, since they would
+        write the same files on a case-insensitive file system), or an output would overwrite an image.
+    """
+    jobs, stems = [], {}
+    for image in images:
+        if str(image) == "-":
+            raise StippleError("batch reads image files, not stdin ('-')")
+        if os.path.isdir(image):
+            raise StippleError(f"{image}: is a directory; give its images (e.g. {os.path.join(image, '*.png')})")
+        stem = os.path.splitext(os.path.basename(image))[0]
+        if stem.casefold() in stems:
+            raise StippleError(
+                f"{stems[stem.casefold()]} and {image} would both write {os.path.join(out_dir, stem)}.*; "
+                "rename one or run them in separate batches"
+            )
+        stems[stem.casefold()] = image
+        outputs = tuple((fmt, os.path.abspath(os.path.join(out_dir, stem + fmt))) for fmt in formats)
+        jobs.append(BatchJob(os.path.abspath(image), outputs, recipe, str(image)))
+    check_distinct(
+        [("image", job.image) for job in jobs], [("output", path) for job in jobs for _, path in job.outputs]
+    )
+    return jobs
+
+
+def is_done(job):
+    """True if every output of ``job`` is a file and none is older than its image.
+
+    Every output is renamed into place whole (``run_job``), so an existing file is complete; an image whose run
+    was cut off (a killed worker, a signal) has none of its outputs, or old ones, and is not done.
+    """
+    try:
+        changed = os.stat(job.image).st_mtime
+    except OSError:
+        return False
+    for _, path in job.outputs:
+        try:
+            status = os.stat(path)
+        except OSError:
+            return False
+        if not stat.S_ISREG(status.st_mode) or status.st_mtime < changed:
+            return False
+    return True
+
+
+def run_job(job):
+    """Stipple one image and write its outputs all-or-nothing; every error becomes a failed ``BatchOutcome``.
+
+    Signals and other ``BaseException`` s are not caught: they stop the batch, and the image's temporary files
+    are removed on the way out.
+    """
+    started = time.perf_counter()
+    try:
+        outputs = stipple_image(job.image, [fmt for fmt, _ in job.outputs], job.recipe)
+        commit_outputs([(path, outputs.files[fmt]) for fmt, path in job.outputs])
+    except StippleError as error:
+        return failed(job, str(error), started)
+    except MemoryError:
+        return failed(job, "out of memory", started)
+    except OSError as error:
+        return failed(job, error.strerror or str(error), started)
+    except Exception as error:  # a bug must not stop the other images: one line, and the batch goes on
+        return failed(job, f"internal error: {type(error).__name__}: {error}", started)
+    result = outputs.result
+    return BatchOutcome(
+        job.name or job.image,
+        "done",
+        result.message,
+        time.perf_counter() - started,
+        int(result.iterations),
+        float(result.energy),
+    )
+
+
+def failed(job, message, started=None):
+    """A failed outcome of ``job``, its message on one line; one that starts by naming the image does not name it
+    twice."""
+    for name in (job.image, job.name, os.path.basename(job.image)):
+        if name and message.startswith(f"{name}: "):
+            message = message[len(name) + 2 :]
+    seconds = 0.0 if started is None else time.perf_counter() - started
+    return BatchOutcome(job.name or job.image, "failed", " ".join(message.split()), seconds)
+
+
+def run_batch(jobs, on_outcome=None, scheduler=None, force=False):
+    """Run every job not done yet (all of them with ``force``), here one after the other or on the Dask
+    scheduler at address ``scheduler``, and report each outcome to ``on_outcome(outcome)`` as it comes.
+
+    Returns
+    -------
+    list of BatchOutcome
+        In the order the outcomes came.
+    """
+    outcomes = []
+
+    def report(outcome):
+        outcomes.append(outcome)
+        if on_outcome is not None:
+            on_outcome(outcome)
+
+    todo = []
+    for job in jobs:
+        if not force and is_done(job):
+            report(BatchOutcome(job.name or job.image, "skipped", "outputs exist"))
+        else:
+            todo.append(job)
+    if scheduler is None:
+        for job in todo:
+            report(run_job(job))
+    elif todo:
+        run_on_cluster(todo, scheduler, report)
+    return outcomes
+
+
+def run_on_cluster(jobs, address, report):
+    """One Dask task per job on the scheduler at ``address``; each task writes its own outputs.
+
+    The workers must see the images and the output folder at the same paths (a shared file system). A task whose
+    worker dies is run again on another worker by the scheduler (up to its ``allowed-failures``); one that still
+    fails is reported as failed, and a rerun of the batch redoes it. Each task's result is released as soon as it
+    has come, so that a worker dying later does not make the scheduler run its finished tasks again.
+    """
+    client = connect(address)  # first: it names the missing extra
+    from distributed import as_completed
+
+    pending = {}
+    try:
+        run_id = uuid.uuid4().hex[:8]
+        keys = [f"stipple-batch-{run_id}-{index}-{os.path.basename(job.image)}" for index, job in enumerate(jobs)]
+        futures = client.map(run_job, jobs, key=keys, pure=False)
+        pending = {future.key: (future, job) for future, job in zip(futures, jobs, strict=True)}
+        finished = as_completed(futures, loop=client.loop)
+        del futures
+        for future in finished:
+            _, job = pending.pop(future.key)
+            try:
+                outcome = future.result()
+            except Exception as error:  # the task never returned: its worker died too often, or it was lost
+                outcome = failed(job, cluster_failure(error))
+            future.release()
+            report(outcome)
+    finally:
+        if pending:
+            client.cancel([future for future, _ in pending.values()])
+        client.close()
+
+
+def cluster_failure(error):
+    """The message of a task that never returned its outcome."""
+    if type(error).__name__ == "KilledWorker":
+        return "its worker died while running it (Dask KilledWorker: the scheduler's allowed-failures were spent)"
+    first = str(error).split(". ")[0]
+    return f"task failed on the cluster: {type(error).__name__}: {first}"
+
+
+def connect(address):
+    """A ``distributed.Client`` of the scheduler at ``address``, or a StippleError saying what is missing."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise StippleError(
+            "--scheduler needs Dask distributed: pip install 'stipple[cluster]' (or dask[distributed])"
+        ) from None
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as error:
+        raise StippleError(f"cannot reach the Dask scheduler {address}: {' '.join(str(error).split())}") from None
+
+
+def exit_status(outcomes):
+    """0 if no image failed, else ``FAILED_BASE`` + the number failed (at most ``FAILED_BASE + FAILED_CAP``)."""
+    count = sum(outcome.status == "failed" for outcome in outcomes)
+    return FAILED_BASE + min(count, FAILED_CAP) if count else 0

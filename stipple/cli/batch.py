@@ -1,0 +1,150 @@
+"""``stipple batch``: many images, each stippled as ``stipple torus`` would, here or on a Dask cluster."""
+
+import copy
+import os
+import sys
+import time
+
+import click
+
+from ..batch import exit_status, parse_formats, plan_batch, run_batch
+from ..errors import StippleError
+from ..halftone import INITS, check_integer
+from ..io.commit import check_writable
+from .torus import torus, torus_recipe
+
+# Options of ``stipple torus`` that name one image's files or its checkpoint, or its inks: not a batch's.
+NOT_BATCH = {
+    "config",
+    "image",
+    "outputs",
+    "checkpoint",
+    "checkpoint_every",
+    "resume",
+    "palette",
+    "black",
+    "union_weight",
+}
+
+
+# The help of the copied options whose meaning differs in a batch.
+BATCH_HELP = {
+    "quiet": "No progress bar or summary (failed images are still reported).",
+    "verbose": "Also one line per image (iterations, energy, seconds).",
+}
+
+
+def torus_params():
+    """Copies of ``stipple torus``'s options that apply to every image of a batch (``NOT_BATCH`` left out)."""
+    params = [copy.copy(param) for param in torus.params if param.name not in NOT_BATCH]
+    for param in params:
+        param.help = BATCH_HELP.get(param.name, param.help)
+    return params
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True)
+@click.option(
+    "--out-dir",
+    "-d",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Folder of the outputs DIR/<stem>.<ext> (made if missing).",
+)
+@click.option(
+    "--format",
+    "formats",
+    default="csv,png",
+    show_default=True,
+    help="Outputs per image: a comma-separated list of csv, png, svg.",
+)
+@click.option(
+    "--scheduler",
+    default=None,
+    help="Address of a Dask distributed scheduler (tcp://host:8786): one task per image on its workers, which "
+    "must see the images and DIR at the same paths. Default: here, one image after the other.",
+)
+@click.option("--force", is_flag=True, help="Redo every image, also those whose outputs exist.")
+def batch(inputs, **options):
+    """Stipple every image of INPUTS as 'stipple torus' would (the same bits for the same --seed and --threads),
+    writing DIR/<stem>.<ext>. An image whose outputs all exist (and are newer than it) is skipped, so a rerun
+    finishes a cut-off batch. An image that fails gets one line and the others go on; the exit status is
+    100 + the number of images that failed (at most 125), 0 if none did."""
+    started = time.perf_counter()
+    try:
+        jobs = plan(inputs, options)
+        progress = BatchProgress(len(jobs), options)
+        try:
+            outcomes = run_batch(jobs, progress, scheduler=options["scheduler"], force=options["force"])
+        finally:
+            progress.close()
+    except StippleError as error:
+        raise click.ClickException(str(error)) from None
+    summary(outcomes, options, started)
+    sys.exit(exit_status(outcomes))
+
+
+batch.params.extend(torus_params())
+
+
+def plan(inputs, options):
+    """The batch's jobs, every file and option checked before any work; makes the output folder."""
+    if options["init"] not in INITS:
+        raise StippleError(f"--init for a batch must be one of {', '.join(INITS)}, not {options['init']!r}")
+    check_integer("seed", options["seed"], 0, 2**63 - 1)
+    formats = parse_formats(options["formats"])
+    recipe = torus_recipe(options)
+    out_dir = options["out_dir"]
+    jobs = plan_batch(inputs, out_dir, formats, recipe)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as error:
+        raise StippleError(f"{out_dir}: cannot make the output folder ({error.strerror or error})") from None
+    check_writable(os.path.join(out_dir, "stipple-batch.check"))
+    return jobs
+
+
+class BatchProgress:
+    """The bar over images on stderr (when it is a TTY and not --quiet), and one line per failed image (always)
+    and per finished one (--verbose)."""
+
+    def __init__(self, total, options):
+        self.verbose = options["verbose"] and not options["quiet"]
+        self.bar = None
+        if not options["quiet"] and sys.stderr.isatty():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit="image", file=sys.stderr, dynamic_ncols=True)
+
+    def __call__(self, outcome):
+        if outcome.status == "failed":
+            self.echo(f"stipple batch: {outcome.image}: {outcome.message}")
+        elif self.verbose:
+            details = f"{outcome.iterations} iterations, E={outcome.energy:.6e}, {outcome.seconds:.1f} s"
+            self.echo(
+                f"stipple batch: {outcome.image}: {outcome.status}" + (f"; {details}" * (outcome.status == "done"))
+            )
+        if self.bar is not None:
+            self.bar.update(1)
+
+    def echo(self, line):
+        if self.bar is not None:
+            self.bar.write(line, file=sys.stderr)
+        else:
+            click.echo(line, err=True)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def summary(outcomes, options, started):
+    """One line of counts on stderr (also under --quiet when an image failed)."""
+    counts = {status: sum(outcome.status == status for outcome in outcomes) for status in ("done", "skipped", "failed")}
+    if options["quiet"] and not counts["failed"]:
+        return
+    click.echo(
+        f"stipple batch: {counts['done']} done, {counts['skipped']} skipped (outputs exist), {counts['failed']} "
+        f"failed of {len(outcomes)} images; {time.perf_counter() - started:.1f} s",
+        err=True,
+    )
