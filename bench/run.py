@@ -22,7 +22,6 @@ from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
-from video import clips, video_case  # bench/video.py, beside this script
 
 from stipple.allocator import reuse_freed_memory
 from stipple.halftone import default_threads, run
@@ -30,6 +29,9 @@ from stipple.io.images import load_density
 from stipple.sphere import CellMap, from_lon_lat, sphere_problem
 from stipple.torus import torus_problem
 from stipple.transforms import alm_size, spherical_angles
+
+sys.path.insert(0, str(Path(__file__).parent))
+from video import clips, video_case  # noqa: E402 (bench/video.py, beside this script)
 
 TORUS_CASES = [(30150, 650), (200000, 1300)]
 SPHERE_CASES = [(200000, 1000)]
@@ -188,7 +190,7 @@ def main(argv=None):
     for arguments in QUICK_SCALE_CASES if args.quick else SCALE_CASES:
         record(scale_case(arguments))
     for count in QUICK_VIDEO_CASES if args.quick else VIDEO_CASES:
-        for name, clip in clips(count, 24, real=False):
+        for name, clip in clips(count, 6 if args.quick else 24, real=False):
             record({"video": True, **video_case(clip, count, args.threads, name)})
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
     with open(args.output, "w") as stream:

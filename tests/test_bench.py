@@ -15,8 +15,11 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
     runpy.run_path(str(ROOT / "bench" / "run.py"), run_name="__main__")
     report = json.loads(output.read_text())
     assert {"ducc0", "finufft", "numpy"} <= set(report["versions"])
-    cases = [case for case in report["cases"] if not case.get("scale")]
+    cases = [case for case in report["cases"] if not case.get("scale") and not case.get("video")]
     scale = [case for case in report["cases"] if case.get("scale")]
+    (video,) = [case for case in report["cases"] if case.get("video")]
+    assert video["M"] == 500 and video["frames"] == 6 and video["seconds_per_warm_frame"] > 0
+    assert video["seconds_per_cold_run"] > 0 and 0 < video["energy_over_cold"]["max"] < 1.5
     assert [case["domain"] for case in cases] == ["torus"] * 3 + ["sphere"] * 4
     assert [case["near_field"] for case in cases] == [True, False, True, True, False, True, False]
     torus, design = scale
