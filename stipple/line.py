@@ -26,11 +26,16 @@ from .objective import SumObjective
 from .sampling import hilbert_index
 from .torus import check_weights, torus_near_kernel, torus_problem, torus_scale
 
-# Default length: L = LENGTH_FACTOR sqrt(M W H) pixels, so that the vertex spacing h = L/M is 0.75**2 of the mean
-# stroke spacing W H / L. Measured at M = 20000, drawn 1 px wide (PSNR at sigma 2 / 4 px): the portrait 25.5/37.0 dB
-# with 0.58, 27.6/32.8 with 0.75, 26.2/28.1 with 1.0, 21.3/22.3 with 1.33: a longer line overlaps itself where the
-# image is dark (one pixel wide strokes closer than a pixel), a shorter one shows its strokes at sigma = 2 px.
+# Default length: L = c sqrt(M W H) pixels, c = LENGTH_FACTOR (rho / REFERENCE_DENSITY)**-LENGTH_EXPONENT with
+# rho = M / (W H) vertices per pixel, clipped to LENGTH_FACTOR_RANGE. Measured on the tuning images (portrait and
+# camera, 256 px, PSNR at sigma 2 px; /tmp scans summarised in docs/line.md): best c = 0.75-0.9 at rho = 0.31
+# (M = 20000), 0.9-1.05 at rho = 0.15, 1.0-1.25 at rho = 0.046. A sparse line needs to be relatively longer or its
+# strokes (W H / L apart) show at sigma = 2 px; a dense one must stay short or it overlaps itself where the image is
+# dark (strokes drawn 1 px wide closer than a pixel).
 LENGTH_FACTOR = 0.75
+REFERENCE_DENSITY = 0.305
+LENGTH_EXPONENT = 0.15
+LENGTH_FACTOR_RANGE = (0.6, 1.1)
 # Default bandwidth: N = 4.02 / (mean stroke spacing), the dots' ratio with the stroke spacing as the spacing.
 MODES_PER_SPACING = 4.02
 PENALTY_GROWTH = 8.0
@@ -48,10 +53,19 @@ MARGIN_SPACINGS = 2.0
 
 
 def default_length(n_vertices, shape):
-    """Default curve length in pixels, ``0.75 sqrt(M W H)`` (a TSP tour through M dots is ~0.7 sqrt(M W H) on a
-    flat image; through the portrait's 20000 default dots LKH found 34930 px = 0.96 sqrt(M W H))."""
+    """Default curve length in pixels, ``c sqrt(M W H)`` with ``c`` from the vertex density (see ``length_factor``).
+
+    A TSP tour through M dots is ~0.7 sqrt(M W H) on a flat image; through the portrait's 20000 default dots LKH
+    found 34930 px = 0.96 sqrt(M W H).
+    """
     rows, columns = shape
-    return LENGTH_FACTOR * float(np.sqrt(n_vertices * rows * columns))
+    return length_factor(n_vertices / (rows * columns)) * float(np.sqrt(n_vertices * rows * columns))
+
+
+def length_factor(density):
+    """Length factor ``c`` for ``density`` vertices per pixel: 0.75 at 0.305, growing as the line gets sparser."""
+    factor = LENGTH_FACTOR * (density / REFERENCE_DENSITY) ** -LENGTH_EXPONENT
+    return float(np.clip(factor, *LENGTH_FACTOR_RANGE))
 
 
 def default_line_bandwidth(length, shape):
@@ -302,7 +316,7 @@ def draw_line(
         Density (``stipple.load_density``).
     n_vertices : int
     length : float, optional
-        Curve length bound L in pixels (default ``0.75 sqrt(M W H)``).
+        Curve length bound L in pixels (default ``default_length``: ``c sqrt(M W H)``, c 0.6-1.1).
     bandwidth : int, optional
     init : array_like, optional
         Starting vertices in unit coordinates (default: ``initial_loop``).

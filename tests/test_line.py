@@ -15,6 +15,7 @@ from stipple.line import (
     draw_line,
     hilbert_index,
     initial_loop,
+    length_factor,
     line_problem,
     moore_index,
     resample_closed,
@@ -139,6 +140,16 @@ def test_start_tour_closes_without_a_long_jump(rng, shape):
     spacing = np.sqrt(weights.size / 3000)
     assert steps.max() < 6 * spacing
     assert steps.max() < 0.1 * max(shape)
+
+
+def test_default_length_grows_relative_to_sqrt_mwh_as_the_line_gets_sparser():
+    """c = L / sqrt(M W H) is 0.75 at 0.305 vertices per pixel, (rho'/rho)**-0.15 apart elsewhere, within 0.6-1.1."""
+    assert default_length(20000, (256, 256)) == pytest.approx(0.75 * np.sqrt(20000 * 256 * 256), rel=0.01)
+    ratio = length_factor(0.05) / length_factor(0.2)
+    assert ratio == pytest.approx(4**0.15, rel=1e-12)
+    factors = [length_factor(density) for density in np.logspace(-4, 2, 25)]
+    assert np.all(np.diff(factors) <= 0) and factors[0] == 1.1 and factors[-1] == 0.6
+    assert default_length(3000, (512, 512)) == pytest.approx(1.1 * np.sqrt(3000 * 512 * 512))
 
 
 def test_resample_closed_spaces_points_equally_along_a_square():

@@ -16,7 +16,12 @@ from .supervise import finish, guarded_files, supervised, write_outputs
 @click.command()
 @click.argument("image", required=False)
 @common_options(iterations=LINE_ITERATIONS, settle=False)
-@click.option("--length", type=float, default=None, help="Curve length in pixels (default: 0.75 sqrt(M W H)).")
+@click.option(
+    "--length",
+    type=float,
+    default=None,
+    help="Curve length in pixels (default: c sqrt(M W H), c 0.6-1.1 from M/(W H); docs/line.md).",
+)
 @click.option("--init", default=None, help="Start: a CSV of x,y pixel positions in path order (default: a loop).")
 @click.pass_context
 def line(ctx, image, **options):
