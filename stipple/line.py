@@ -19,7 +19,7 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import HalftoneResult, Problem, check_count, check_positive, run
-from .line_start import MIN_CURVE_VERTICES, closed_length, initial_loop, moore_index, resample_closed
+from .line_start import MIN_CURVE_VERTICES, closed_length, initial_loop, resample_closed
 from .manifolds import Rectangle
 from .nearfield import NearField, TorusPairs
 from .objective import SumObjective
@@ -415,6 +415,5 @@ __all__ = [
     "hilbert_index",
     "initial_loop",
     "line_problem",
-    "moore_index",
     "resample_closed",
 ]

@@ -6,23 +6,23 @@ import numpy as np
 import pytest
 from conftest import gradient_taylor_slope, hessian_taylor_slope
 from PIL import Image
+from scipy.ndimage import distance_transform_edt
 
 from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import (
     Rectangle,
     SpeedConstraint,
+    closed_length,
     default_length,
     draw_line,
     hilbert_index,
     initial_loop,
     length_factor,
     line_problem,
-    moore_index,
     resample_closed,
 )
-from stipple.line_start import moore_tour
+from stipple.line_start import OFFSET_SPACINGS, spanning_tree, tree_outline
 from stipple.objective import SumObjective
-from stipple.tours import two_opt
 
 STEPS = np.logspace(-2.5, -4, 6)
 ROOT = Path(__file__).resolve().parents[1]
@@ -116,30 +116,77 @@ def test_hilbert_index_visits_neighbouring_cells_in_turn():
     assert np.all(steps == 1)
 
 
-@pytest.mark.parametrize("order", [1, 2, 3, 5])
-def test_moore_index_is_a_closed_walk_through_every_cell(order):
-    """Every cell once, each next to the one before, and the last next to the first (the closing step)."""
-    side = 1 << order
-    y, x = np.divmod(np.arange(side * side), side)
-    index = moore_index(x, y, order=order)
-    assert sorted(index) == list(range(side * side))
-    walk = np.argsort(index)
-    steps = np.abs(x[walk] - np.roll(x[walk], -1)) + np.abs(y[walk] - np.roll(y[walk], -1))
-    assert np.all(steps == 1)
+def crossings(polygon):
+    """Pairs of non-adjacent edges of the closed ``polygon`` that cross (direct O(n²) test)."""
+    count = len(polygon)
+    ends = np.roll(polygon, -1, axis=0)
+
+    def side(a, b, c):
+        return np.sign(
+            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+        )
+
+    first, second = np.triu_indices(count, 2)
+    keep = ~((first == 0) & (second == count - 1))
+    first, second = first[keep], second[keep]
+    a, b, c, d = polygon[first], ends[first], polygon[second], ends[second]
+    return int(np.count_nonzero((side(a, b, c) != side(a, b, d)) & (side(c, d, a) != side(c, d, b))))
 
 
-@pytest.mark.parametrize("shape", [(64, 64), (24, 96), (96, 24)])
-def test_start_tour_closes_without_a_long_jump(rng, shape):
-    """The cause of the portrait's wire along its top edge: a Hilbert-order tour closes with a jump the length
-    of the image's side, which 2-opt cannot remove and which resampling turned into a straight run of vertices.
-    The Moore-order tour's longest step stays a few sample spacings long, on square, wide and tall images."""
-    weights = np.full(shape, 0.5)
-    tour = moore_tour(weights, 3000, rng)
-    tour = tour[two_opt(tour)]
-    steps = np.linalg.norm(np.roll(tour, -1, axis=0) - tour, axis=1)
-    spacing = np.sqrt(weights.size / 3000)
-    assert steps.max() < 6 * spacing
-    assert steps.max() < 0.1 * max(shape)
+def test_spanning_tree_is_the_minimum_one(rng):
+    """n - 1 edges, connected, and as long as Prim's tree on the complete graph (direct O(n²) oracle)."""
+    points = rng.random((120, 2))
+    edges = spanning_tree(points)
+    distances = np.linalg.norm(points[:, None] - points[None], axis=2)
+    inside, best, total = np.zeros(120, bool), distances[0].copy(), 0.0
+    inside[0] = True
+    for _ in range(119):
+        nearest = int(np.argmin(np.where(inside, np.inf, best)))
+        total += best[nearest]
+        inside[nearest] = True
+        best = np.minimum(best, distances[nearest])
+    assert len(edges) == 119
+    assert distances[edges[:, 0], edges[:, 1]].sum() == pytest.approx(total, rel=1e-12)
+
+
+@pytest.mark.parametrize("count", [3, 4, 40, 300])
+def test_tree_outline_walks_every_edge_twice_without_crossing(rng, count):
+    """The outline visits each vertex once per incident edge, steps only along tree edges (both ways), is a
+    simple polygon, and is twice the tree's length up to the offset."""
+    points = rng.random((count, 2))
+    edges = spanning_tree(points)
+    walk = tree_outline(points, edges, 0.0)
+    assert len(walk) == 2 * (count - 1)
+    index = np.array([np.flatnonzero(np.all(points == point, axis=1))[0] for point in walk])
+    np.testing.assert_array_equal(np.bincount(index, minlength=count), np.bincount(edges.ravel(), minlength=count))
+    steps = np.sort(np.stack([index, np.roll(index, -1)], axis=1), axis=1)
+    assert {tuple(step) for step in steps.tolist()} == {tuple(sorted(edge)) for edge in edges.tolist()}
+    tree_length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1).sum()
+    assert closed_length(walk) == pytest.approx(2 * tree_length, rel=1e-12)
+    offset = 1e-3 * tree_length / count
+    outline = tree_outline(points, edges, offset)
+    assert crossings(outline) == 0
+    assert closed_length(outline) == pytest.approx(2 * tree_length, abs=8 * offset * len(outline))
+
+
+@pytest.mark.parametrize("count", [600, 2000])
+def test_start_loop_on_a_silhouette_stays_on_the_shape(count):
+    """The cause of the horse's emptied legs: a start loop whose long jumps crossed white between thin parts of
+    the shape, resampled to equal steps, left wires there. On a comb (a bar with six thin teeth), no part of the
+    loop lies farther than its offset (plus a pixel's diagonal) outside the comb (the Moore-order tour with 2-opt
+    left 28-55 px of line there, four seeds each), and the loop is about the length asked for."""
+    weights = np.zeros((64, 96))
+    weights[8:18, 8:88] = 1
+    for tooth in range(6):
+        weights[18:58, 10 + 15 * tooth : 15 + 15 * tooth] = 1
+    outside = distance_transform_edt(weights == 0)
+    length = default_length(count, weights.shape)
+    offset = OFFSET_SPACINGS * weights.size / length
+    for seed in range(4):
+        loop = initial_loop(weights, count, length, np.random.default_rng(seed)) * np.array([96, 64])
+        pixel = np.clip(loop.astype(int), 0, [95, 63])
+        assert np.all(outside[pixel[:, 1], pixel[:, 0]] <= offset + 1.5)
+        assert closed_length(loop) == pytest.approx(length, rel=0.15)
 
 
 def test_default_length_grows_relative_to_sqrt_mwh_as_the_line_gets_sparser():
