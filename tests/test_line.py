@@ -29,9 +29,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def small_line(rng, hessian="full", penalty=3.0):
-    """A 40-vertex loop on a 12×20 image, perturbed so that some segments are stretched and some compressed."""
+    """A 40-vertex loop on a 12×20 image, perturbed so that some segments are stretched and some compressed;
+    three quadrature nodes per segment."""
     weights = rng.random((12, 20))
-    problem = line_problem(weights, 40, length=50.0, bandwidth=14, penalty=penalty, epsilon=1e-13, hessian=hessian)
+    problem = line_problem(
+        weights, 40, length=50.0, bandwidth=14, penalty=penalty, epsilon=1e-13, hessian=hessian, subdivisions=3
+    )
     points = problem.manifold.inward(initial_loop(weights, 40, 50.0, rng))
     points += 0.01 * rng.standard_normal((40, 2)) * image_extent(problem)
     return problem, points
@@ -46,7 +49,7 @@ def test_every_term_of_the_curve_objective_takes_part(rng):
     problem, points = small_line(rng)
     discrepancy, near, speed = problem.objective.terms
     problem.objective.set_points(points)
-    assert near.pair_count > 0 and speed.energy() > 0
+    assert near.inner.pair_count > 0 and speed.energy() > 0
     assert np.any(speed._excess > 0) and np.any(speed._excess < 0)
 
 
@@ -67,6 +70,25 @@ def test_curve_objective_full_hessian_taylor_slope_three(rng, terms):
     slope, hess_direction = hessian_taylor_slope(objective, points, direction, STEPS)
     assert objective.hessian_gram([direction])[0, 0] == pytest.approx(np.sum(direction * hess_direction), rel=1e-9)
     assert slope == pytest.approx(3, abs=0.15)
+
+
+def test_curve_nodes_are_the_segments_trapezoidal_nodes_and_pull_back_by_the_adjoint(rng):
+    """Node k of segment i is p_i + k/K (p_{i+1} - p_i) (direct loop); B^T is the adjoint of B; the wrapped
+    discrepancy is the inner one at those nodes."""
+    problem, points = small_line(rng)
+    wrapped = problem.objective.terms[0]
+    count, subdivisions = len(points), wrapped.subdivisions
+    nodes = wrapped.nodes(points)
+    for i in range(count):
+        for k in range(subdivisions):
+            expected = points[i] + k / subdivisions * (points[(i + 1) % count] - points[i])
+            np.testing.assert_allclose(nodes[i * subdivisions + k], expected, rtol=0, atol=1e-15)
+    field, covector = rng.standard_normal(points.shape), rng.standard_normal(nodes.shape)
+    assert np.sum(wrapped.nodes(field) * covector) == pytest.approx(np.sum(field * wrapped.pull_back(covector)))
+    wrapped.set_points(points)
+    energy = wrapped.energy()
+    wrapped.inner.set_points(nodes)
+    assert energy == wrapped.inner.energy()
 
 
 def test_speed_constraint_matches_its_direct_sum(rng):
@@ -91,13 +113,14 @@ def test_gauss_newton_forms_are_positive_semi_definite(rng):
 
 def test_near_field_leaves_out_curve_neighbours_only(rng):
     problem, points = small_line(rng)
-    near = problem.objective.terms[1]
+    nodes = problem.objective.terms[1].nodes(points)
+    near = problem.objective.terms[1].inner
     steps = problem.settings["exclude"]
-    near.set_points(points)
+    near.set_points(nodes)
     first, second, count = near._pairs
     gap = np.abs(first - second)
     assert np.minimum(gap, count - gap).min() > steps
-    physical = points * near.geometry.scale
+    physical = nodes * near.geometry.scale
     expected = 0
     for i in range(count):
         for j in range(i + 1, count):
