@@ -23,8 +23,13 @@ from stipple.torus import halftone_torus
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_IMAGES = [ROOT / "samples/astronaut256.png", Path("/work/shared/data/camera.png")]
-# LKH-3 settings for tens of thousands of cities: Delaunay candidates (the default alpha-nearness is quadratic).
-LKH_PARAMETERS = "RUNS = 1\nCANDIDATE_SET_TYPE = DELAUNAY\nINITIAL_TOUR_ALGORITHM = GREEDY\nMAX_TRIALS = {trials}\n"
+# LKH-3 settings for tens of thousands of cities: Delaunay candidates (the default alpha-nearness is quadratic)
+# without the subgradient ascent, which took over 10 minutes for 30000 cities. Without it, 30000 uniform random
+# cities in 512² got a tour of 0.719 sqrt(n A) in 3.4 s (the Beardwood-Halton-Hammersley constant is about 0.712).
+LKH_PARAMETERS = (
+    "RUNS = 1\nCANDIDATE_SET_TYPE = DELAUNAY\nINITIAL_TOUR_ALGORITHM = GREEDY\nSUBGRADIENT = NO\n"
+    "MAX_CANDIDATES = 5\nMAX_TRIALS = {trials}\n"
+)
 LKH_SCALE = 1000.0  # EUC_2D rounds distances to integers: coordinates in 1/1000 pixel
 
 

@@ -8,9 +8,10 @@ composed with ``SumObjective``; ``draw_line`` drives its weight up in phases unt
 ``constraint_tol`` (1 %) of ``h``. The curve lives in the image's rectangle (``Rectangle``: steps are clipped to
 it, not wrapped), so the drawing never crosses the torus seam; the transforms stay periodic.
 
-The near field leaves out pairs of vertices up to ``exclude`` steps apart along the curve (the near-field radius
-over ``h``, plus one): they are meant to be close (``h`` is below the stroke spacing) and their repulsion would
-only stretch the curve.
+The discrepancy and the near field are taken at ``K`` quadrature nodes per segment (``CurveNodes``: the
+trapezoidal rule of the length measure), so that the drawn ink, not only the vertices, is even. The near field
+leaves out pairs of nodes up to ``exclude`` nodes apart along the curve (the near-field radius over the node
+spacing, plus one): they are meant to be close and their repulsion would only stretch the curve.
 """
 
 import json
@@ -134,7 +135,8 @@ def line_problem(
     Returns
     -------
     Problem
-        ``objective = SumObjective(discrepancy, near field, speed)``; ``settings['domain'] == 'line'``.
+        ``objective = SumObjective(CurveNodes(discrepancy), CurveNodes(near field), speed)``;
+        ``settings['domain'] == 'line'``.
     """
     weights = check_weights(weights)
     n_vertices = check_count(n_vertices)
