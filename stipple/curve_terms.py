@@ -1,5 +1,5 @@
 """The objective terms of a one-line drawing: constant speed, quadrature nodes along the segments, and which
-vertex pairs the near field leaves out."""
+pairs of nodes the near field leaves out."""
 
 import numpy as np
 

@@ -79,10 +79,17 @@ def length_factor(density):
     return float(np.clip(factor, *LENGTH_FACTOR_RANGE))
 
 
-def default_subdivisions(length, n_vertices, shape):
+def default_subdivisions(length, n_vertices):
     """Quadrature nodes per segment: ``ceil(h / NODE_SPACING)`` for segments ``h = L / M`` pixels long, at most
     ``MAX_SUBDIVISIONS``."""
     return int(np.clip(np.ceil(length / n_vertices / NODE_SPACING - 1e-9), 1, MAX_SUBDIVISIONS))
+
+
+def check_subdivisions(subdivisions):
+    """``subdivisions`` as an int from 1 to 64 (or a ``StippleError`` naming it)."""
+    if isinstance(subdivisions, bool) or not float(subdivisions).is_integer() or not 1 <= subdivisions <= 64:
+        raise StippleError(f"subdivisions must be a whole number from 1 to 64, not {subdivisions!r}")
+    return int(subdivisions)
 
 
 def default_line_bandwidth(length, shape):
@@ -148,7 +155,9 @@ def line_problem(
     padded = np.pad(weights, margin)
     longest = max(padded.shape)
     padded_bandwidth = int(2 * np.ceil(bandwidth * longest / max(weights.shape) / 2))
-    subdivisions = default_subdivisions(length, n_vertices, weights.shape) if subdivisions is None else subdivisions
+    subdivisions = (
+        default_subdivisions(length, n_vertices) if subdivisions is None else check_subdivisions(subdivisions)
+    )
     nodes = n_vertices * subdivisions
     dots = torus_problem(
         padded, nodes, padded_bandwidth, backend=backend, threads=threads, epsilon=epsilon, hessian=hessian

@@ -8,6 +8,7 @@ from conftest import gradient_taylor_slope, hessian_taylor_slope
 from PIL import Image
 from scipy.ndimage import distance_transform_edt
 
+from stipple.errors import StippleError
 from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import (
     Rectangle,
@@ -89,6 +90,12 @@ def test_curve_nodes_are_the_segments_trapezoidal_nodes_and_pull_back_by_the_adj
     energy = wrapped.energy()
     wrapped.inner.set_points(nodes)
     assert energy == wrapped.inner.energy()
+
+
+@pytest.mark.parametrize("subdivisions", [0, 2.5, -1, 65, True])
+def test_line_problem_names_bad_subdivisions(subdivisions):
+    with pytest.raises(StippleError, match="subdivisions"):
+        line_problem(np.ones((8, 8)), 40, subdivisions=subdivisions)
 
 
 def test_speed_constraint_matches_its_direct_sum(rng):
