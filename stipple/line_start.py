@@ -1,13 +1,12 @@
-"""The start of a one-line drawing: the outline of a minimum spanning tree through density samples.
+"""The start of a one-line drawing: a tour through the dots of ``stipple torus``, resampled to equal steps.
 
-A closed walk around a plane tree, keeping the tree on one side, passes along every edge twice (out and back) and
-never crosses itself; each step is an edge of the tree, so the loop has no jump longer than the tree's longest
-edge. The Euclidean minimum spanning tree (a subgraph of the Delaunay triangulation) joins samples by their
-nearest links: inside a dark region its edges are about one sample spacing long, and only the few edges that join
-separate dark regions cross white. This replaced a tour in Moore-curve order shortened by 2-opt (issue #25): that
-tour kept about a dozen edges over five times the mean, which crossed white between the thin parts of a
-silhouette; resampled to equal steps they became wires that the optimiser pulled taut, dragging the line out of
-the shape (a horse's legs emptied, a wire ran along the ground between its hooves).
+M dots placed by the same method for the same image are evenly spread with the image's density; a short tour
+through them is TSP art, whose strokes are already about evenly spaced. The tour: the first visits of the closed
+walk around the dots' Euclidean minimum spanning tree (the walk that keeps the tree on one side: no crossing, no
+step longer than the tree's longest edge), shortened by 2-opt (``stipple.tours``). Measured against the outline of
+the spanning tree of random density samples (the start before, which had replaced a Moore-curve tour whose long
+jumps across white became wires): on a compact silhouette the outline's out-and-back passes stay paired strokes
+and the optimised line lost 2.6/3.7 dB to TSP art at M = 10000 (docs/line.md).
 """
 
 import numpy as np
@@ -15,16 +14,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import minimum_spanning_tree
 from scipy.spatial import Delaunay
 
-from .sampling import sample_image
+from .torus import halftone_torus
+from .tours import two_opt
 
 MIN_CURVE_VERTICES = 4
-INITIAL_TOURS = 6
-# The loop runs this many mean stroke spacings (W H / L) off the tree, into the wedge between consecutive edges.
-# Measured at M = 3000 (portrait and a shapes image, PSNR at sigma 2/4 px): 0.1 gave 17.4/28.5 and 25.3/31.9 dB,
-# 0.25 17.5/28.3 and 25.9/32.6, 0.5 17.5/28.9 and 26.0/32.9, 1.0 16.7/27.9 and 24.9/31.7.
-OFFSET_SPACINGS = 0.5
-# Samples per vertex of the first try (the tree's outline is about twice the tree, which is about 0.65 sqrt(n A)).
-FIRST_SAMPLES_PER_VERTEX = 0.1
 
 
 def spanning_tree(points):
@@ -66,21 +59,12 @@ def outline_walk(points, edges):
     return walk, following, target, angle
 
 
-def tree_outline(points, edges, offset):
-    """The outline of the plane tree ``edges`` on ``points``: one point per visit of a vertex.
-
-    A visit between the edge in and the edge out, which bound a wedge of angle ``sweep`` (the whole turn at a
-    leaf), is placed ``offset`` off the vertex along the wedge's bisector. The ``2 (n - 1)`` points form a closed
-    polygon without crossings for small ``offset``.
-    """
-    walk, following, target, angle = outline_walk(points, edges)
-    count = len(target)
-    reverse = (walk + count // 2) % count
-    start = angle[reverse]
-    sweep = np.mod(angle[following[walk]] - start, 2 * np.pi)
-    sweep[sweep < 1e-12] = 2 * np.pi
-    bisector = start + sweep / 2
-    return points[target[walk]] + offset * np.stack([np.cos(bisector), np.sin(bisector)], axis=1)
+def tree_tour(points):
+    """A closed tour through ``points`` (vertex order): the first visits of the walk around their spanning tree."""
+    walk, _, target, _ = outline_walk(points, spanning_tree(points))
+    visits = target[walk]
+    _, first = np.unique(visits, return_index=True)
+    return visits[np.sort(first)]
 
 
 def closed_length(points):
@@ -96,22 +80,14 @@ def resample_closed(points, count):
     return np.stack([np.interp(targets, cumulative, closed[:, axis]) for axis in range(2)], axis=1)
 
 
-def initial_loop(weights, n_vertices, length, rng):
-    """A closed loop of ``n_vertices`` equally spaced vertices (unit coordinates) of length about ``length`` px.
+def initial_loop(weights, n_vertices, seed=0, threads=None):
+    """A closed loop of ``n_vertices`` equally spaced vertices (unit coordinates): TSP art, resampled.
 
-    The outline of the minimum spanning tree of density samples, offset ``OFFSET_SPACINGS`` mean stroke
-    spacings, with as many samples as make it about ``length`` long (an outline's length grows like the square
-    root of its samples; the best of ``INITIAL_TOURS`` tries), resampled by arclength.
+    ``n_vertices`` dots of ``stipple.torus.halftone_torus`` (``seed``, ``threads``), toured by ``tree_tour`` and
+    2-opt. The loop has the tour's length; ``draw_line`` then stretches it to the line's length.
     """
     rows, columns = weights.shape
-    offset = OFFSET_SPACINGS * rows * columns / length
-    count = max(MIN_CURVE_VERTICES, int(FIRST_SAMPLES_PER_VERTEX * n_vertices))
-    best = None
-    for _ in range(INITIAL_TOURS):
-        samples = sample_image(weights, rng, count) * np.array([columns, rows])
-        loop = resample_closed(tree_outline(samples, spanning_tree(samples), offset), n_vertices)
-        ratio = length / closed_length(loop)
-        if best is None or abs(np.log(ratio)) < abs(np.log(best[1])):
-            best = (loop, ratio)
-        count = int(np.clip(count * ratio**2, MIN_CURVE_VERTICES, 8 * n_vertices))
-    return best[0] / np.array([columns, rows])
+    dots = halftone_torus(weights, n_vertices, seed=seed, threads=threads)
+    pixels = np.mod(dots.points, 1.0) * np.array([columns, rows])
+    order = two_opt(pixels, tree_tour(pixels)) if n_vertices > MIN_CURVE_VERTICES else np.arange(n_vertices)
+    return resample_closed(pixels[order], n_vertices) / np.array([columns, rows])
