@@ -20,7 +20,7 @@ import numpy as np
 
 from .curve_terms import CurveNodes, SpeedConstraint, curve_neighbours
 from .errors import StippleError
-from .halftone import HalftoneResult, Problem, check_count, check_positive, run
+from .halftone import MAX_BANDWIDTH, HalftoneResult, Problem, check_count, check_positive, run
 from .line_start import MIN_CURVE_VERTICES, closed_length, initial_loop, resample_closed
 from .manifolds import Rectangle
 from .nearfield import NearField, TorusPairs
@@ -42,10 +42,14 @@ LENGTH_FACTOR_RANGE = (0.6, 1.1)
 # silhouettes: on a tuning figure (19 % dark) at M = 10000 the uncapped 19304 px gave 37.8/41.5 dB (sigma 2/4 px),
 # strokes overlapping nearly twice over; capped, 11943 px gave 41.2/46.3 (TSP art 40.0/45.5).
 FILL_COVERAGE = 1.1
+MIN_STEP_SPACINGS = 0.5
+DARKEST_MASS_SHARE = 0.01
 # Default bandwidth: N = 4.02 / (stroke spacing where the image is darkest), the dots' ratio with the stroke
 # spacing as the spacing. With the mean spacing instead, the objective could not tell strokes stacked in pairs from
 # strokes a pixel apart in a dark region: from the LKH tour on the tuning figure, 100-400 iterations lowered PSNR
-# from 40.1 to 31-34 dB; with 3x the bandwidth they raised it to 42.7.
+# from 40.1 to 31-34 dB; with 3x the bandwidth they raised it to 42.7. The ratio max w / mean w is 1.1-2 on photos,
+# 3-5.2 on the silhouettes measured; beyond MAX_PEAK_RATIO (a lone dark spot) it would only slow the transforms.
+MAX_PEAK_RATIO = 6.0
 MODES_PER_SPACING = 4.02
 # Quadrature nodes along each segment (``CurveNodes``), at most this many pixels apart: the drawn line is ink
 # along its segments, not at its vertices, and segments longer than a pixel let the vertices look even while the
@@ -72,14 +76,18 @@ MARGIN_SPACINGS = 2.0
 
 def default_length(n_vertices, weights):
     """Default curve length in pixels: ``c sqrt(M W H)`` with ``c`` from the vertex density (see ``length_factor``),
-    at most ``FILL_COVERAGE`` times the length that covers the darkest tone once, ``sum w / max w`` (1-px pen).
+    at most ``FILL_COVERAGE`` times the length that covers the darkest tone once, ``A = sum w / t`` (1-px pen;
+    ``t = darkest_tone(weights)``),
+    but not below ``MIN_STEP_SPACINGS sqrt(M A)``: steps of at least half the spacing of M dots on ``A`` (a small
+    dark spot would otherwise get a line of a few pixels).
 
     A TSP tour through M dots is ~0.7 sqrt(M W H) on a flat image; through the portrait's 20000 default dots LKH
     found 34930 px = 0.96 sqrt(M W H).
     """
     rows, columns = weights.shape
     length = length_factor(n_vertices / (rows * columns)) * float(np.sqrt(n_vertices * rows * columns))
-    return min(length, FILL_COVERAGE * float(weights.sum() / weights.max()))
+    dark_area = float(weights.sum()) / darkest_tone(weights)
+    return min(length, max(FILL_COVERAGE * dark_area, MIN_STEP_SPACINGS * np.sqrt(n_vertices * dark_area)))
 
 
 def length_factor(density):
@@ -101,12 +109,22 @@ def check_subdivisions(subdivisions):
     return int(subdivisions)
 
 
+def darkest_tone(weights):
+    """The density that the darkest ``DARKEST_MASS_SHARE`` of the ink reaches: the largest ``t`` with at least that
+    share of ``sum w`` in pixels of ``w >= t`` (robust to a few outlying pixels, unlike ``max w``)."""
+    values = np.sort(weights, axis=None)[::-1]
+    reached = np.searchsorted(np.cumsum(values), DARKEST_MASS_SHARE * values.sum())
+    return float(values[min(reached, values.size - 1)])
+
+
 def default_line_bandwidth(length, weights):
-    """Even ``N = 4.02 / s`` along the longer side, ``s = (W H / L) (mean w / max w)`` the stroke spacing where the
-    image is darkest (unit lengths): the line's ink per area follows ``w``, so its spacing goes as ``1 / w``."""
+    """Even ``N = 4.02 / s`` along the longer side, ``s = (W H / L) (mean w / t)`` the stroke spacing where the
+    image is darkest, ``t = darkest_tone(weights)`` (unit lengths): the line's ink per area follows ``w``, so its
+    spacing goes as ``1 / w``. The ratio ``t / mean w`` counts up to ``MAX_PEAK_RATIO``, N up to ``MAX_BANDWIDTH``."""
     rows, columns = weights.shape
-    spacing = rows * columns / length / max(rows, columns) * float(weights.mean() / weights.max())
-    return int(2 * np.ceil(MODES_PER_SPACING / spacing / 2))
+    peak = min(darkest_tone(weights) / float(weights.mean()), MAX_PEAK_RATIO)
+    spacing = rows * columns / length / max(rows, columns) / peak
+    return min(int(2 * np.ceil(MODES_PER_SPACING / spacing / 2)), MAX_BANDWIDTH)
 
 
 def blank_margin(length, shape):
@@ -384,6 +402,7 @@ __all__ = [
     "HalftoneResult",
     "SpeedConstraint",
     "closed_length",
+    "darkest_tone",
     "draw_line",
     "hilbert_index",
     "initial_loop",

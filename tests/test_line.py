@@ -14,6 +14,7 @@ from stipple.line import (
     Rectangle,
     SpeedConstraint,
     closed_length,
+    darkest_tone,
     default_length,
     default_line_bandwidth,
     draw_line,
@@ -226,9 +227,9 @@ def test_default_length_grows_relative_to_sqrt_mwh_as_the_line_gets_sparser():
 
 
 def test_default_length_fills_the_darkest_tone_at_most_once_and_bandwidth_follows_its_spacing():
-    """On a silhouette (30 % of the pixels at 0.8) the length is capped at 1.1 sum w / max w, the length that
-    covers the shape once with a 1-px pen; the bandwidth is 4.02 over the stroke spacing where the image is
-    darkest, (W H / L)(mean w / max w): 1 / 0.3 times that of a gray image at the same length."""
+    """On a silhouette (30 % of the pixels at 0.8) the length is capped at 1.1 sum w / t (t the darkest tone, 0.8),
+    the length that covers the shape once with a 1-px pen; the bandwidth is 4.02 over the stroke spacing where
+    the image is darkest, (W H / L)(mean w / t): 1 / 0.3 times that of a gray image at the same length."""
     silhouette = np.zeros((100, 200))
     silhouette[:30] = 0.8
     assert default_length(20000, silhouette) == pytest.approx(1.1 * 6000)
@@ -236,6 +237,20 @@ def test_default_length_fills_the_darkest_tone_at_most_once_and_bandwidth_follow
     assert default_length(20000, gray) == pytest.approx(length_factor(1.0) * np.sqrt(20000 * 100 * 200))
     ratio = default_line_bandwidth(5000, silhouette) / default_line_bandwidth(5000, gray)
     assert ratio == pytest.approx(1 / 0.3, rel=0.01)
+
+
+def test_darkest_tone_ignores_a_few_outlying_pixels_and_a_dark_spot_keeps_room_for_its_vertices():
+    """One black pixel on light gray (0.02) carries 0.3 % of the mass: the darkest tone is the gray, so the gray
+    field gets the ordinary length; a 3×3 black spot on white gets at least 0.5 sqrt(M A), A = 9 px."""
+    gray = np.full((128, 128), 0.02)
+    speck = gray.copy()
+    speck[64, 64] = 1.0
+    assert darkest_tone(speck) == pytest.approx(0.02)
+    assert default_length(1000, speck) == pytest.approx(default_length(1000, gray))
+    spot = np.zeros((128, 128))
+    spot[60:63, 60:63] = 1.0
+    assert darkest_tone(spot) == 1.0
+    assert default_length(1000, spot) == pytest.approx(0.5 * np.sqrt(1000 * 9))
 
 
 def test_resample_closed_spaces_points_equally_along_a_square():
