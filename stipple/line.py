@@ -77,9 +77,8 @@ MARGIN_SPACINGS = 2.0
 def default_length(n_vertices, weights):
     """Default curve length in pixels: ``c sqrt(M W H)`` with ``c`` from the vertex density (see ``length_factor``),
     at most ``FILL_COVERAGE`` times the length that covers the darkest tone once, ``A = sum w / t`` (1-px pen;
-    ``t = darkest_tone(weights)``),
-    but not below ``MIN_STEP_SPACINGS sqrt(M A)``: steps of at least half the spacing of M dots on ``A`` (a small
-    dark spot would otherwise get a line of a few pixels).
+    ``t = darkest_tone(weights)``), but not below ``MIN_STEP_SPACINGS sqrt(M A)``: steps of at least half the
+    spacing of M dots on ``A`` (a small dark spot would otherwise get a line of a few pixels).
 
     A TSP tour through M dots is ~0.7 sqrt(M W H) on a flat image; through the portrait's 20000 default dots LKH
     found 34930 px = 0.96 sqrt(M W H).
