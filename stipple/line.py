@@ -47,8 +47,9 @@ DARKEST_MASS_SHARE = 0.01
 # Default bandwidth: N = 4.02 / (stroke spacing where the image is darkest), the dots' ratio with the stroke
 # spacing as the spacing. With the mean spacing instead, the objective could not tell strokes stacked in pairs from
 # strokes a pixel apart in a dark region: from the LKH tour on the tuning figure, 100-400 iterations lowered PSNR
-# from 40.1 to 31-34 dB; with 3x the bandwidth they raised it to 42.7. The ratio max w / mean w is 1.1-2 on photos,
-# 3-5.2 on the silhouettes measured; beyond MAX_PEAK_RATIO (a lone dark spot) it would only slow the transforms.
+# from 40.1 to 31-34 dB; with 3x the bandwidth they raised it to 42.7. The ratio t / mean w (t = darkest_tone) is
+# 1.1-2 on photos, 3-5.2 on the silhouettes measured; beyond MAX_PEAK_RATIO (a lone dark spot) it would only slow
+# the transforms.
 MAX_PEAK_RATIO = 6.0
 MODES_PER_SPACING = 4.02
 # Quadrature nodes along each segment (``CurveNodes``), at most this many pixels apart: the drawn line is ink
@@ -294,7 +295,7 @@ def draw_line(
     n_vertices : int
     length : float, optional
         Curve length bound L in pixels (default ``default_length``: ``c sqrt(M W H)``, c 0.6-1.1, at most
-        1.1 ``sum w / max w``).
+        1.1 ``sum w / t``, ``t`` the darkest tone).
     bandwidth : int, optional
     init : array_like, optional
         Starting vertices in unit coordinates (default: ``initial_loop``).

@@ -33,11 +33,11 @@ def spanning_tree(points):
 
 
 def outline_walk(points, edges):
-    """The closed walk around the plane tree ``edges``: directed edges in walk order, and each one's angle.
+    """The closed walk around the plane tree ``edges``: the ``2 (n - 1)`` vertices it arrives at, in order.
 
-    Directed edge ``e`` is ``edges[e]`` for ``e < n - 1`` and reversed for ``e >= n - 1``. Arriving at a vertex
-    along an edge, the walk leaves along the next edge counterclockwise from the one it came by (a leaf sends it
-    back): the rule that traces a face of a plane graph, here the tree's one face.
+    Arriving at a vertex along an edge, the walk leaves along the next edge counterclockwise from the one it came
+    by (a leaf sends it back): the rule that traces a face of a plane graph, here the tree's one face. Directed
+    edge ``e`` is ``edges[e]`` for ``e < n - 1`` and reversed for ``e >= n - 1``.
     """
     source = np.concatenate([edges[:, 0], edges[:, 1]])
     target = np.concatenate([edges[:, 1], edges[:, 0]])
@@ -56,13 +56,12 @@ def outline_walk(points, edges):
     for step in range(count):
         walk[step] = edge
         edge = following[edge]
-    return walk, following, target, angle
+    return target[walk]
 
 
 def tree_tour(points):
     """A closed tour through ``points`` (vertex order): the first visits of the walk around their spanning tree."""
-    walk, _, target, _ = outline_walk(points, spanning_tree(points))
-    visits = target[walk]
+    visits = outline_walk(points, spanning_tree(points))
     _, first = np.unique(visits, return_index=True)
     return visits[np.sort(first)]
 

@@ -148,23 +148,6 @@ def test_hilbert_index_visits_neighbouring_cells_in_turn():
     assert np.all(steps == 1)
 
 
-def crossings(polygon):
-    """Pairs of non-adjacent edges of the closed ``polygon`` that cross (direct O(n²) test)."""
-    count = len(polygon)
-    ends = np.roll(polygon, -1, axis=0)
-
-    def side(a, b, c):
-        return np.sign(
-            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
-        )
-
-    first, second = np.triu_indices(count, 2)
-    keep = ~((first == 0) & (second == count - 1))
-    first, second = first[keep], second[keep]
-    a, b, c, d = polygon[first], ends[first], polygon[second], ends[second]
-    return int(np.count_nonzero((side(a, b, c) != side(a, b, d)) & (side(c, d, a) != side(c, d, b))))
-
-
 def test_spanning_tree_is_the_minimum_one(rng):
     """n - 1 edges, connected, and as long as Prim's tree on the complete graph (direct O(n²) oracle)."""
     points = rng.random((120, 2))
@@ -187,8 +170,7 @@ def test_walk_around_the_tree_passes_every_edge_both_ways_and_its_tour_is_at_mos
     every point once and, by the triangle inequality, at most twice the tree's length (a direct check)."""
     points = rng.random((count, 2))
     edges = spanning_tree(points)
-    walk, _, target, _ = outline_walk(points, edges)
-    visits = target[walk]
+    visits = outline_walk(points, edges)
     steps = np.stack([visits, np.roll(visits, -1)], axis=1)
     assert len(steps) == 2 * (count - 1)
     assert sorted(map(tuple, steps.tolist())) == sorted(map(tuple, np.concatenate([edges, edges[:, ::-1]]).tolist()))
