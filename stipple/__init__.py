@@ -1,19 +1,27 @@
-"""stipple: halftoning on the torus and the sphere by minimising a discrepancy with NUFFT-based CG."""
+"""stipple: halftoning on the torus and the sphere by minimising a discrepancy with NUFFT-based CG.
 
-from .design import spherical_design
-from .errors import StippleError
-from .halftone import HalftoneResult
-from .io.images import load_density
-from .sphere import halftone_sphere
-from .torus import halftone_torus
+The public names below are imported on first use (``__getattr__``), so that ``import stipple.cli`` and
+``stipple --help`` load neither the sphere nor scipy.
+"""
+
+import importlib
 
 __version__ = "0.1.0"
-__all__ = [
-    "HalftoneResult",
-    "StippleError",
-    "halftone_sphere",
-    "halftone_torus",
-    "load_density",
-    "spherical_design",
-    "__version__",
-]
+# Public name -> the module that defines it.
+_PUBLIC = {
+    "HalftoneResult": ".halftone",
+    "StippleError": ".errors",
+    "halftone_sphere": ".sphere",
+    "halftone_torus": ".torus",
+    "load_density": ".io.images",
+    "spherical_design": ".design",
+}
+__all__ = [*sorted(_PUBLIC), "__version__"]
+
+
+def __getattr__(name):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'stipple' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_PUBLIC[name], __name__), name)
+    globals()[name] = value
+    return value

@@ -14,7 +14,6 @@ from scipy.spatial import cKDTree
 from .tone import fit_inside, tone_radii_layers
 
 TOUCH_FRACTION = 0.45
-STYLES = ("tone", "plotter")
 MIN_SQUASH = 0.02
 
 
@@ -150,7 +149,6 @@ def ink_radius(ink_area, count):
 
 
 ORTHO_SIZE = 1000.0
-PROJECTIONS = ("ortho", "equirect")
 
 
 def sphere_canvas(projection, fmt=".png"):

@@ -3,6 +3,8 @@
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .render.styles import DOT_STYLES
+
 NEIGHBOURS = 8
 
 
@@ -83,7 +85,6 @@ def physical_centres(points, shape, width):
     return points * np.array([columns, rows]) * (width[0] / columns)
 
 
-DOT_STYLES = ("circle", "filled", "point")
 SEGMENTS_PER_TURN = 24
 
 

@@ -17,7 +17,8 @@ from .colour import halftone_colour, parse_palette
 from .drawing import flat_dots
 from .errors import StippleError
 from .line import LINE_ITERATIONS
-from .plotter import DOT_STYLES, dot_paths
+from .plotter import dot_paths
+from .render.styles import DOT_STYLES
 
 
 def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):

@@ -26,6 +26,34 @@ def test_help(command):
     assert "--help" in result.output
 
 
+def test_the_help_defaults_are_the_librarys():
+    """``stipple.cli.defaults`` repeats the library's choices so that --help needs no numpy: each must match."""
+    from stipple import halftone, optimize, transforms, video
+    from stipple.cli import defaults
+    from stipple.line import LINE_ITERATIONS
+
+    assert defaults.BETAS == optimize.BETAS and defaults.SETTLE_WINDOW == optimize.SETTLE_WINDOW
+    assert defaults.INITS == halftone.INITS and defaults.DEFAULT_SETTLE == halftone.DEFAULT_SETTLE
+    assert defaults.BACKENDS == transforms.BACKENDS
+    assert defaults.FRAME_ITERATIONS == video.FRAME_ITERATIONS
+    assert defaults.LINE_ITERATIONS == LINE_ITERATIONS
+
+
+def test_the_command_line_loads_without_numpy():
+    """``stipple --help``, ``stipple COMMAND --help`` and usage errors import no numpy, scipy or the method: each
+    command imports the library inside its function (the import, not a clock, is what is checked)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; import stipple.cli.main; "
+        "heavy = sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy', 'PIL', 'ducc0', 'finufft') "
+        "or m in ('stipple.halftone', 'stipple.torus', 'stipple.sphere')); print(heavy)"
+    )
+    output = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert output.strip() == "[]"
+
+
 @pytest.fixture
 def image(tmp_path):
     rows, columns = np.mgrid[0:20, 0:30]

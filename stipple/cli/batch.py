@@ -7,10 +7,9 @@ import time
 
 import click
 
-from ..batch import exit_status, parse_formats, plan_batch, run_batch
 from ..errors import StippleError
-from ..halftone import INITS, check_integer
 from ..io.commit import check_writable
+from .defaults import INITS
 from .torus import torus, torus_recipe
 
 # Options of ``stipple torus`` that name one image's files or its checkpoint, or its inks: not a batch's.
@@ -70,6 +69,8 @@ def batch(inputs, **options):
     writing DIR/<stem>.<ext>. An image whose outputs all exist (and are newer than it) is skipped, so a rerun
     finishes a cut-off batch. An image that fails gets one line and the others go on; the exit status is
     100 + the number of images that failed (at most 125), 0 if none did."""
+    from ..batch import exit_status, run_batch
+
     started = time.perf_counter()
     try:
         jobs = plan(inputs, options)
@@ -89,6 +90,9 @@ batch.params.extend(torus_params())
 
 def plan(inputs, options):
     """The batch's jobs, every file and option checked before any work; makes the output folder."""
+    from ..batch import parse_formats, plan_batch
+    from ..halftone import check_integer
+
     if options["init"] not in INITS:
         raise StippleError(f"--init for a batch must be one of {', '.join(INITS)}, not {options['init']!r}")
     check_integer("seed", options["seed"], 0, 2**63 - 1)

@@ -3,14 +3,10 @@
 import time
 
 import click
-import numpy as np
 
 from ..errors import StippleError
-from ..halftone import INITS
 from ..io.commit import output_format
-from ..io.png import check_png_canvas, default_png_width
-from ..plotter import physical_centres
-from ..transforms import BACKENDS
+from .defaults import BACKENDS, INITS
 from .options import common_options, palette_options, render_settings, resolve_input
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
@@ -34,6 +30,8 @@ def colour(ctx, image, **options):
 
 def run_colour(image, options, started):
     """Separate, optimise jointly and write one layer per ink (``stipple colour``, ``stipple torus --palette``)."""
+    import numpy as np
+
     from ..colour import colour_problem, parse_palette
     from ..io.images import load_colour
     from ..io.writers import layered_torus_output
@@ -96,6 +94,8 @@ def check_colour_options(options):
 
 def check_png(options, canvas):
     """Refuse, before the run, a PNG output too large to draw: the inks' picture holds about 33 bytes a pixel."""
+    from ..io.png import check_png_canvas, default_png_width
+
     if ".png" in [output_format(path) for path in options["outputs"]]:
         check_png_canvas(canvas, options["png_width"] or default_png_width(options["n_points"]), layers=33)
 
@@ -104,5 +104,7 @@ def ordered(points, shape, settings, options):
     """One layer's points, along a short pen path when ``--order`` is given (each pen draws its own layer)."""
     if len(points) < 2:
         return points
+    from ..plotter import physical_centres
+
     centres = physical_centres(points, shape, settings["width"])
     return plot_order(centres, points, options, settings["width"][1])

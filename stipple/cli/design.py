@@ -4,9 +4,8 @@ import time
 
 import click
 
-from ..drawing import PROJECTIONS
 from ..errors import StippleError
-from ..io.points import read_sphere_init
+from ..render.styles import PROJECTIONS
 from .options import (
     apply_options,
     config_option,
@@ -63,6 +62,7 @@ def design(ctx, **options):
     """A numerical spherical design of strength t: M points whose equal-weight rule integrates every spherical
     harmonic of degree 1..t to within --error (CSV in full precision)."""
     from ..design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
+    from ..io.points import read_sphere_init
     from ..io.writers import sphere_output
     from ..sphere import lon_lat
 

@@ -7,9 +7,6 @@ import click
 
 from ..errors import StippleError
 from ..io.commit import commit_outputs
-from ..io.png import spectrum_plot
-from ..io.points import read_points
-from ..picture import SIGMAS
 from .options import check_extension, check_longitude, parse_levels
 from .supervise import guarded_files
 
@@ -81,6 +78,8 @@ def evaluate(
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
     CSVs per ink and for all dots together. Given a drawn PICTURE.png instead of POINTS: its picture measures
     against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma)."""
+    from ..io.png import spectrum_plot
+    from ..io.points import read_points
     from ..reports import evaluation_report, format_report
 
     options = {
@@ -128,6 +127,7 @@ def evaluate(
 
 def evaluate_picture(picture_source, input_source, json_path, picture, options, point_only):
     """``stipple evaluate PICTURE.png INPUT``: the picture measures as text, or JSON with ``--json``."""
+    from ..picture import SIGMAS
     from ..reports import format_picture_report, picture_report
 
     try:

@@ -5,10 +5,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.images import load_input
-from ..io.points import read_torus_init
-from ..io.units import parse_length
-from ..line import LINE_ITERATIONS
+from .defaults import LINE_ITERATIONS
 from .options import common_options, is_default, resolve_input
 from .supervise import finish, guarded_files, supervised, write_outputs
 
@@ -26,6 +23,9 @@ from .supervise import finish, guarded_files, supervised, write_outputs
 @click.pass_context
 def line(ctx, image, **options):
     """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
+    from ..io.images import load_input
+    from ..io.points import read_torus_init
+    from ..io.units import parse_length
     from ..io.writers import line_output
     from ..line import line_points
 

@@ -1,15 +1,13 @@
 """Option groups shared by the commands, and the conversions of their values (lengths, colours, views)."""
 
-import click
-import numpy as np
+import math
 
-from ..drawing import STYLES
+import click
+
 from ..errors import StippleError
-from ..halftone import DEFAULT_SETTLE, INITS
-from ..io.units import BLACK, WHITE, parse_colour, parse_length
-from ..optimize import BETAS, SETTLE_WINDOW
-from ..plotter import DOT_STYLES
+from ..render.styles import DOT_STYLES, STYLES
 from .config import load_config
+from .defaults import BETAS, DEFAULT_SETTLE, INITS, SETTLE_WINDOW
 
 
 def resolve_input(ctx, given):
@@ -232,6 +230,8 @@ def palette_options(default):
 def render_settings(options):
     """The drawing settings of the command's options: lengths parsed, colours resolved (``--invert``: white dots
     on black unless ``--background`` / ``--color`` say otherwise)."""
+    from ..io.units import BLACK, WHITE, parse_colour, parse_length
+
     invert = bool(options.get("invert"))
     background, color = options.get("background"), options.get("color")
     return {
@@ -288,7 +288,7 @@ def parse_view(text):
         lon, lat = (float(part) for part in text.split(","))
     except ValueError:
         raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
-    if not (-90 <= lat <= 90 and np.isfinite(lon)):
+    if not (-90 <= lat <= 90 and math.isfinite(lon)):
         raise StippleError(f"view must be a finite longitude and a latitude in [-90, 90], not {text!r}")
     return lon, lat
 

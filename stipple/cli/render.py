@@ -1,14 +1,10 @@
 """``stipple render``: saved points drawn again (SVG, PNG, CSV, GeoJSON) without rerunning the optimiser."""
 
 import click
-import numpy as np
 
-from ..drawing import PROJECTIONS, sphere_canvas
 from ..errors import StippleError
 from ..io.commit import output_format
-from ..io.png import check_png_outputs
-from ..io.points import read_points, torus_canvas
-from ..plotter import physical_centres
+from ..render.styles import PROJECTIONS
 from .options import look_options, parse_view, render_settings
 from .supervise import guarded_files, plot_order, write_outputs
 
@@ -46,7 +42,13 @@ from .supervise import guarded_files, plot_order, write_outputs
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
 def render(points_source, outputs, like, size, coords, projection, view, **options):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
+    import numpy as np
+
+    from ..drawing import sphere_canvas
+    from ..io.png import check_png_outputs
+    from ..io.points import read_points, torus_canvas
     from ..io.writers import sphere_output, torus_output
+    from ..plotter import physical_centres
     from ..sphere import lon_lat
 
     png_width = options["png_width"]

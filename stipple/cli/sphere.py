@@ -4,11 +4,9 @@ import time
 
 import click
 
-from ..drawing import PROJECTIONS, sphere_canvas
 from ..errors import StippleError
 from ..io.commit import output_format
-from ..io.png import check_png_outputs
-from ..io.points import read_sphere_init
+from ..render.styles import PROJECTIONS
 from .options import check_longitude, common_options, init_input, is_default, parse_view, render_settings, resolve_input
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
@@ -51,6 +49,9 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
+    from ..drawing import sphere_canvas
+    from ..io.png import check_png_outputs
+    from ..io.points import read_sphere_init
     from ..io.writers import sphere_output
     from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
 

@@ -9,13 +9,10 @@ import sys
 import time
 
 import click
-import numpy as np
 
 from ..errors import StippleError
-from ..halftone import check_integer, run
 from ..io.commit import check_writable, commit_outputs, output_format
 from ..io.safety import CheckpointLock, check_distinct
-from ..plotter import plotter_order
 
 
 class Progress:
@@ -152,6 +149,10 @@ def write_outputs(paths, render):
 def solve(problem, options, init, stop=None):
     """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options (and ``stop``, a callback
     that ends the run by returning True)."""
+    import numpy as np
+
+    from ..halftone import run
+
     verbose = options["verbose"] and not options["quiet"]
 
     def announce():
@@ -192,6 +193,8 @@ def supervised(options, launch, stop=None, announce=None):
     seed, callback and checkpoint arguments that ``halftone.run`` and ``draw_line`` share. The callback also ends
     the run when ``stop`` returns True, and ``announce()`` reports the settings between the checks of the
     checkpoint interval and of the seed. Returns the result and the signal that stopped it (or None)."""
+    from ..halftone import check_integer
+
     seconds, iterations = parse_every(options["checkpoint_every"])
     if announce is not None:
         announce()
@@ -239,6 +242,8 @@ def plot_order(centres, points, options, unit):
     """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
     if not options.get("order"):
         return points
+    from ..plotter import plotter_order
+
     order, before, after = plotter_order(centres)
     if not options.get("quiet"):
         click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {unit}", err=True)

@@ -3,15 +3,10 @@
 import time
 
 import click
-import numpy as np
 
-from ..batch import TorusRecipe, draw_image, image_problem
 from ..errors import StippleError
 from ..io.commit import output_format
-from ..io.images import load_input
-from ..io.points import read_torus_init
-from ..plotter import physical_centres
-from ..transforms import BACKENDS
+from .defaults import BACKENDS
 from .options import common_options, init_input, palette_options, parse_levels, render_settings, resolve_input
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
@@ -60,6 +55,11 @@ def torus(ctx, image, **options):
         from .colour import run_colour
 
         return run_colour(image, options, started)
+    from ..batch import draw_image, image_problem
+    from ..io.images import load_input
+    from ..io.points import read_torus_init
+    from ..plotter import physical_centres
+
     try:
         recipe = torus_recipe(options)
         width = recipe.draw["width"]
@@ -79,6 +79,7 @@ def torus(ctx, image, **options):
 def torus_recipe(options):
     """What ``stipple torus`` does to an image with these options, as a ``stipple.batch.TorusRecipe`` (the
     run's stopping, checkpoint and progress options are ``solve``'s)."""
+    from ..batch import TorusRecipe
     from ..torus import DEFAULT_EPSILON
 
     return TorusRecipe(
@@ -122,6 +123,8 @@ def tone_hints(weights, options):
     """One line each for a faint or a mostly dark input, unless --quiet, --levels or --invert was given."""
     if options["quiet"] or options["levels"] is not None or options["invert"]:
         return
+    import numpy as np
+
     low, high = np.percentile(weights, [0.5, 99.5])
     if high - low < FAINT_SPAN:
         click.echo(

@@ -8,12 +8,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..halftone import check_integer
-from ..io.png import check_png_outputs
-from ..io.points import read_torus_init
-from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
-from ..transforms import BACKENDS
-from ..video import FRAME_ITERATIONS, VideoSettings, stipple_video
+from .defaults import BACKENDS, FRAME_ITERATIONS
 from .options import common_options, init_input, render_settings, resolve_input
 from .supervise import SIGNALS, Progress, guarded_files, parse_every
 
@@ -59,6 +54,8 @@ def video(ctx, source, **options):
     """Stipple SOURCE, a video (MP4, MOV, WebM, GIF, ...; needs stipple[video]) or a folder or glob of frame
     images, with the same dots in every frame: -o out.mp4, -o dots.csv (frame,x,y; row i of every frame is dot
     i), -o 'frames/%04d.png' (one PNG or SVG per frame)."""
+    from ..io.png import check_png_outputs
+    from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
     from ..io.writers import torus_output
 
     started = time.perf_counter()
@@ -94,6 +91,10 @@ def video(ctx, source, **options):
 
 def video_settings(options, shape):
     """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
+    from ..halftone import check_integer
+    from ..io.points import read_torus_init
+    from ..video import VideoSettings
+
     check_integer("seed", options["seed"], 0, 2**63 - 1)
     return VideoSettings(
         n_points=options["n_points"],
@@ -135,6 +136,8 @@ class FrameProgress(Progress):
 def run_frames(frames, settings, outputs, options):
     """Every frame under the progress bar and signal handling: a first SIGINT / SIGTERM ends the frame under way
     (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal."""
+    from ..video import stipple_video
+
     seconds, count = parse_every(options["checkpoint_every"])
     progress = FrameProgress(frames.count, not options["quiet"] and sys.stderr.isatty())
 

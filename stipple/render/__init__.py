@@ -1,0 +1,1 @@
+"""The drawing (placeholder, filled in the next step)."""
