@@ -16,8 +16,8 @@ import numpy as np
 from PIL import Image
 
 from stipple.colour import halftone_colour
-from stipple.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
 from stipple.io.writers import layered_torus_output
+from stipple.measures.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
 
 
 def load(path, size):

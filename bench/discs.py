@@ -24,9 +24,9 @@ import platform
 import time
 
 import stipple
-from stipple.discs import optimise_discs
-from stipple.drawing import tone_dots
-from stipple.picture import measure_picture
+from stipple.discs.problem import optimise_discs
+from stipple.measures.picture import measure_picture
+from stipple.render.dots import tone_dots
 from stipple.tone.raster import union_coverage_image
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from stipple.evaluate import fitted_similarity, line_ink
 from stipple.line import LINE_ITERATIONS, draw_line
+from stipple.measures.evaluate import fitted_similarity, line_ink
 from stipple.torus import halftone_torus
 
 ROOT = Path(__file__).resolve().parents[1]

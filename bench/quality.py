@@ -153,9 +153,9 @@ def iterations_from(stderr):
 
 def evaluate(domain, input_path, points_path, count):
     """The library's evaluation of the points; returns the report dict and the points (unit / vectors)."""
-    from stipple.evaluate import evaluate_sphere, evaluate_torus
     from stipple.io.images import load_density
     from stipple.io.points import read_points
+    from stipple.measures.evaluate import evaluate_sphere, evaluate_torus
 
     _, points = read_points(str(points_path))
     if domain == "torus":

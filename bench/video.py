@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 sys.path.insert(0, str(Path(__file__).parent))
 from clips import gradient_clip, real_clip, still_mask  # noqa: E402
 
-from stipple.evaluate import discrepancy_energy  # noqa: E402
+from stipple.measures.evaluate import discrepancy_energy  # noqa: E402
 from stipple.torus import default_bandwidth, halftone_torus, torus_problem  # noqa: E402
 from stipple.video import VideoSettings, stipple_video  # noqa: E402
 

@@ -20,7 +20,7 @@ from .io.images import load_input
 from .io.png import check_png_outputs
 from .io.points import read_torus_init
 from .io.safety import check_distinct
-from .plotter import physical_centres, plotter_order
+from .render.pen import physical_centres, plotter_order
 
 FORMATS = ("csv", "png", "svg")
 # Exit status of a batch in which some images failed: FAILED_BASE + the number failed, at most FAILED_BASE +

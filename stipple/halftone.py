@@ -91,18 +91,22 @@ def hexagonal_spacing(n_points, area):
     return np.sqrt(2 * area / (np.sqrt(3) * n_points))
 
 
-def peak_ratio(values, areas=None, mass_fraction=0.01):
-    """How much denser than average the densest ``mass_fraction`` of the density is.
-
-    The density level above which ``mass_fraction`` of the mass lies, over the mean density: 1 for a constant
-    density, about the peak-to-mean ratio for a bump, and blind to a few dark pixels that hold little mass.
-    """
+def darkest_level(values, areas=None, mass_fraction=0.01):
+    """The density level above which ``mass_fraction`` of the mass lies (blind to a few dark pixels that hold
+    little mass, unlike the maximum), and the mean density: ``(level, mean)``."""
     values = np.ravel(values).astype(float)
     areas = np.ones_like(values) if areas is None else np.ravel(areas)
     order = np.argsort(values)[::-1]
     mass = np.cumsum(values[order] * areas[order])
     level = values[order][min(np.searchsorted(mass, mass_fraction * mass[-1]), len(values) - 1)]
-    return float(max(level / (mass[-1] / areas.sum()), 1.0))
+    return float(level), mass[-1] / areas.sum()
+
+
+def peak_ratio(values, areas=None, mass_fraction=0.01):
+    """How much denser than average the densest ``mass_fraction`` of the density is: ``darkest_level`` over the
+    mean density, 1 for a constant density, about the peak-to-mean ratio for a bump."""
+    level, mean = darkest_level(values, areas, mass_fraction)
+    return float(max(level / mean, 1.0))
 
 
 def check_memory(needed, what):
@@ -195,7 +199,7 @@ def run(
         version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main
         run leaves ``COARSE_TIME_SHARE`` of it to the correction.
     """
-    from .io.checkpoint import Checkpointer, load_checkpoint
+    from .checkpoint import Checkpointer, load_checkpoint
 
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
@@ -236,7 +240,7 @@ def run(
         safeguard=safeguard,
         beta=beta,
         settle=settle,
-        callback=_chain(saver, callback),
+        callback=chain_callbacks(saver, callback),
     )
     if saver is not None:
         saver.save(outcome.state)
@@ -304,7 +308,7 @@ def gradient_norm(problem, points):
     return problem.manifold.norm(points, problem.manifold.riesz(points, problem.objective.gradient()))
 
 
-def _chain(*callbacks):
+def chain_callbacks(*callbacks):
     """One callback calling each given one in turn; stops when any of them asks to."""
     active = [callback for callback in callbacks if callback is not None]
     if not active:

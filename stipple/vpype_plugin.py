@@ -14,10 +14,10 @@ import vpype as vp
 import vpype_cli
 
 from .colour import halftone_colour, parse_palette
-from .drawing import flat_dots
 from .errors import StippleError
 from .line import LINE_ITERATIONS
-from .plotter import dot_paths
+from .render.dots import flat_dots
+from .render.pen import dot_paths
 from .render.styles import DOT_STYLES
 
 

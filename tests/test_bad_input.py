@@ -9,9 +9,9 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
+from stipple.checkpoint import save_checkpoint
 from stipple.cli import main
 from stipple.halftone import run
-from stipple.io.checkpoint import save_checkpoint
 from stipple.torus import torus_problem
 
 KEEP = "precious\n"

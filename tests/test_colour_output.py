@@ -9,7 +9,7 @@ from PIL import Image
 from stipple.cli import main
 from stipple.colour import separate
 from stipple.multiclass import class_counts
-from stipple.plotter import SEGMENTS_PER_TURN, dot_paths
+from stipple.render.pen import SEGMENTS_PER_TURN, dot_paths
 
 
 @pytest.fixture

@@ -6,7 +6,7 @@ from conftest import gradient_taylor_slope
 from scipy.special import j0, j1
 
 from stipple import StippleError
-from stipple.discs import DiscFactors, disc_factor, disc_problem, optimise_discs, tone_radius
+from stipple.discs.problem import DiscFactors, disc_factor, disc_problem, optimise_discs, tone_radius
 from stipple.transforms import torus_modes
 
 STEPS = np.logspace(-2.5, -4, 6)

@@ -10,7 +10,7 @@ from PIL import Image
 from scipy.spatial import cKDTree
 
 from stipple.cli import main
-from stipple.drawing import capped_radii, inset
+from stipple.render.dots import capped_radii, inset
 
 PORTRAIT = Path(__file__).resolve().parent.parent / "samples" / "astronaut256.png"
 

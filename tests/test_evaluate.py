@@ -3,7 +3,7 @@ import pytest
 from click.testing import CliRunner
 
 from stipple.cli import main
-from stipple.evaluate import (
+from stipple.measures.evaluate import (
     cap_discrepancy,
     density_at,
     discrepancy_energy,
@@ -270,7 +270,7 @@ def test_sphere_clumps_scale_with_the_density_and_skip_empty_cells():
 
 def test_exact_blurs_match_a_periodic_sum_of_gaussians():
     """One dot blurred exactly is the periodic Gaussian around it; a constant image stays constant."""
-    from stipple.evaluate import exact_blurs
+    from stipple.measures.evaluate import exact_blurs
 
     weights = np.full((20, 30), 0.4)
     point = np.array([[0.31, 0.62]])

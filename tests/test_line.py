@@ -9,23 +9,14 @@ from PIL import Image
 from scipy.ndimage import distance_transform_edt
 
 from stipple.errors import StippleError
-from stipple.evaluate import fitted_similarity, line_ink
-from stipple.line import (
-    Rectangle,
-    SpeedConstraint,
-    closed_length,
-    darkest_tone,
-    default_length,
-    default_line_bandwidth,
-    draw_line,
-    hilbert_index,
-    initial_loop,
-    length_factor,
-    line_problem,
-    resample_closed,
-)
-from stipple.line_start import outline_walk, spanning_tree, tree_tour
+from stipple.line import draw_line
+from stipple.line.problem import darkest_tone, default_length, default_line_bandwidth, length_factor, line_problem
+from stipple.line.start import closed_length, initial_loop, outline_walk, resample_closed, spanning_tree, tree_tour
+from stipple.line.terms import SpeedConstraint
+from stipple.manifolds import Rectangle
+from stipple.measures.evaluate import fitted_similarity, line_ink
 from stipple.objective import SumObjective
+from stipple.sampling import hilbert_index
 
 STEPS = np.logspace(-2.5, -4, 6)
 ROOT = Path(__file__).resolve().parents[1]

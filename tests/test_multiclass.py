@@ -7,8 +7,8 @@ from conftest import taylor_slope
 
 from stipple.colour import separate
 from stipple.errors import StippleError
-from stipple.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
 from stipple.halftone import run
+from stipple.measures.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
 from stipple.multiclass import class_bandwidth, class_counts, halftone_classes, multiclass_problem
 from stipple.torus import halftone_torus, torus_problem
 

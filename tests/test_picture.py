@@ -8,7 +8,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from stipple.cli import main
-from stipple.picture import floyd_steinberg, measure_picture, on_grid
+from stipple.measures.picture import floyd_steinberg, measure_picture, on_grid
 
 pytest.importorskip("skimage")
 

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from stipple.cli import main
-from stipple.plotter import greedy_order, path_length, plotter_order, two_opt
+from stipple.render.pen import greedy_order, path_length, plotter_order, two_opt
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from stipple.tours import two_opt
+from stipple.line.tours import two_opt
 
 
 def tour_length(points, tour):

@@ -7,7 +7,7 @@ from PIL import Image
 
 from stipple import StippleError
 from stipple.cli import main
-from stipple.evaluate import discrepancy_energy
+from stipple.measures.evaluate import discrepancy_energy
 from stipple.torus import halftone_torus, torus_problem
 from stipple.video import VideoSettings, free_dots, stipple_video
 

@@ -104,7 +104,7 @@ def ordered(points, shape, settings, options):
     """One layer's points, along a short pen path when ``--order`` is given (each pen draws its own layer)."""
     if len(points) < 2:
         return points
-    from ..plotter import physical_centres
+    from ..render.pen import physical_centres
 
     centres = physical_centres(points, shape, settings["width"])
     return plot_order(centres, points, options, settings["width"][1])

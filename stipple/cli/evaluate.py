@@ -80,7 +80,7 @@ def evaluate(
     against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma)."""
     from ..io.png import spectrum_plot
     from ..io.points import read_points
-    from ..reports import evaluation_report, format_report
+    from ..measures.reports import evaluation_report, format_report
 
     options = {
         "uniform": uniform,
@@ -127,8 +127,8 @@ def evaluate(
 
 def evaluate_picture(picture_source, input_source, json_path, picture, options, point_only):
     """``stipple evaluate PICTURE.png INPUT``: the picture measures as text, or JSON with ``--json``."""
-    from ..picture import SIGMAS
-    from ..reports import format_picture_report, picture_report
+    from ..measures.picture import SIGMAS
+    from ..measures.reports import format_picture_report, picture_report
 
     try:
         if input_source is None or options["uniform"]:

@@ -44,11 +44,11 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     import numpy as np
 
-    from ..drawing import sphere_canvas
     from ..io.png import check_png_outputs
     from ..io.points import read_points, torus_canvas
     from ..io.writers import sphere_output, torus_output
-    from ..plotter import physical_centres
+    from ..render.dots import sphere_canvas
+    from ..render.pen import physical_centres
     from ..sphere import lon_lat
 
     png_width = options["png_width"]

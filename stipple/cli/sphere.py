@@ -49,10 +49,10 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
-    from ..drawing import sphere_canvas
     from ..io.png import check_png_outputs
     from ..io.points import read_sphere_init
     from ..io.writers import sphere_output
+    from ..render.dots import sphere_canvas
     from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
 
     started = time.perf_counter()

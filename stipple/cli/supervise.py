@@ -242,7 +242,7 @@ def plot_order(centres, points, options, unit):
     """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
     if not options.get("order"):
         return points
-    from ..plotter import plotter_order
+    from ..render.pen import plotter_order
 
     order, before, after = plotter_order(centres)
     if not options.get("quiet"):

@@ -58,7 +58,7 @@ def torus(ctx, image, **options):
     from ..batch import draw_image, image_problem
     from ..io.images import load_input
     from ..io.points import read_torus_init
-    from ..plotter import physical_centres
+    from ..render.pen import physical_centres
 
     try:
         recipe = torus_recipe(options)

@@ -6,8 +6,8 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from .. import allocator
-from ..drawing import ellipse_polygon
 from ..errors import StippleError
+from ..render.dots import ellipse_polygon
 from .units import WHITE
 
 SUPERSAMPLE = 4

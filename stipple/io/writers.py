@@ -3,7 +3,8 @@ or layered), sphere points and one-line drawings, from the format modules beside
 
 import numpy as np
 
-from ..drawing import (
+from ..errors import StippleError
+from ..render.dots import (
     GLOBE,
     ORTHO_SIZE,
     Dots,
@@ -20,8 +21,7 @@ from ..drawing import (
     squash_paths,
     tone_dots,
 )
-from ..errors import StippleError
-from ..plotter import dot_paths
+from ..render.pen import dot_paths
 from .geojson import geojson_bytes
 from .png import default_png_width, png_bytes, render_line, render_picture
 from .points import csv_bytes, layered_csv_bytes

@@ -7,16 +7,17 @@ import sys
 
 import numpy as np
 
-from .colour import parse_palette, separate
-from .errors import StippleError
+from ..colour import parse_palette, separate
+from ..errors import StippleError
+from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
+from ..io.sources import read_source
+from ..line.problem import line_problem
+from ..line.start import closed_length
+from ..multiclass import class_bandwidth
+from ..sphere import sphere_density, sphere_problem
+from ..torus import torus_problem
 from .evaluate import evaluate_line, evaluate_sphere, evaluate_torus
-from .io.images import NPY_MAGIC, load_colour, load_density, load_input
-from .io.sources import read_source
-from .line import closed_length, line_problem
-from .multiclass import class_bandwidth
 from .picture import SIGMAS, floyd_steinberg, mean_chroma, measure_picture
-from .sphere import sphere_density, sphere_problem
-from .torus import torus_problem
 
 # Mean CIELAB chroma above which an input is measured in colour: a gray JPEG's noise stays well below it.
 GRAY_CHROMA = 2.0

@@ -86,8 +86,8 @@ def exact_blurs(weights, points, sigma, threads=1):
     image coefficients and the Gaussian's ``G_n = exp(-2 pi² sigma² |n / size|²)``, over all frequencies up to
     where ``G`` falls below 1e-8, and evaluated at the pixel centres by NUFFTs. Returns two ``(H, W)`` arrays.
     """
-    from .torus import image_coefficients
-    from .transforms import make_nufft, torus_modes
+    from ..torus import image_coefficients
+    from ..transforms import make_nufft, torus_modes
 
     rows, columns = weights.shape
     cycles = max(1.0, 0.97 / sigma)  # cycles per pixel beyond which exp(-2 pi² sigma² f²) < 1e-8
@@ -341,7 +341,7 @@ def evaluate_torus(problem, points, weights):
 
 def evaluate_sphere(problem, points, density):
     """All sphere measures as a dict (see the module docstring)."""
-    from .design import largest_error
+    from ..design import largest_error
 
     expected = expected_iid_energy(problem)
     cells = density.cell_map()
@@ -367,7 +367,7 @@ def evaluate_sphere(problem, points, density):
 
 def line_ink(pixels, shape, pen_width=1.0, closed=True):
     """Ink (0 white .. 1 black) of a polyline through ``pixels`` drawn ``pen_width`` pixels wide, per pixel."""
-    from .io.png import render_line
+    from ..io.png import render_line
 
     rows, columns = shape
     image = render_line(pixels, (columns, rows), columns, pen_width, closed=closed)

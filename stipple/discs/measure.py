@@ -7,9 +7,9 @@ import numpy as np
 from numpy.polynomial import chebyshev
 from scipy.special import j0, j1
 
-from .errors import StippleError
-from .torus import DEFAULT_EPSILON, radial_on_modes
-from .transforms import torus_modes
+from ..errors import StippleError
+from ..torus import DEFAULT_EPSILON, radial_on_modes
+from ..transforms import torus_modes
 
 # The factors cover radii up to HEADROOM times the largest radius seen; rebuilt when a radius grows beyond.
 HEADROOM = 1.5

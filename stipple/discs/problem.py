@@ -42,16 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .disc_measure import (
-    DiscDiscrepancy,
-    DiscFactors,
-    DiscTorus,
-    balanced_size_metric,
-    disc_factor,
-    disc_transform,
-)
-from .errors import StippleError
-from .halftone import (
+from ..errors import StippleError
+from ..halftone import (
     check_bandwidth,
     check_count,
     check_epsilon,
@@ -60,11 +52,11 @@ from .halftone import (
     check_threads,
     default_threads,
 )
-from .io.images import load_density
-from .kernels import ball_kernel
-from .optimize import BETAS, minimize
-from .sampling import stratified_sample
-from .torus import (
+from ..io.images import load_density
+from ..kernels import ball_kernel
+from ..optimize import BETAS, minimize
+from ..sampling import stratified_sample
+from ..torus import (
     DEFAULT_EPSILON,
     axis_bandwidths,
     check_weights,
@@ -73,7 +65,15 @@ from .torus import (
     torus_kernel,
     torus_scale,
 )
-from .transforms import BACKENDS, make_nufft
+from ..transforms import BACKENDS, make_nufft
+from .measure import (
+    DiscDiscrepancy,
+    DiscFactors,
+    DiscTorus,
+    balanced_size_metric,
+    disc_factor,
+    disc_transform,
+)
 
 __all__ = [
     "DiscDiscrepancy",

@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .render.styles import DOT_STYLES
+from .styles import DOT_STYLES
 
 NEIGHBOURS = 8
 

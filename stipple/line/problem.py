@@ -14,19 +14,18 @@ leaves out pairs of nodes up to ``exclude`` nodes apart along the curve (the nea
 spacing, plus one): they are meant to be close and their repulsion would only stretch the curve.
 """
 
-import json
+from dataclasses import dataclass
 
 import numpy as np
 
-from .curve_terms import CurveNodes, SpeedConstraint, curve_neighbours
-from .errors import StippleError
-from .halftone import MAX_BANDWIDTH, HalftoneResult, Problem, check_count, check_positive, run
-from .line_start import MIN_CURVE_VERTICES, closed_length, initial_loop, resample_closed
-from .manifolds import Rectangle
-from .nearfield import NearField, TorusPairs
-from .objective import SumObjective
-from .sampling import hilbert_index
-from .torus import check_weights, torus_near_kernel, torus_problem, torus_scale
+from ..errors import StippleError
+from ..halftone import MAX_BANDWIDTH, Problem, check_count, check_positive, darkest_level
+from ..manifolds import Rectangle
+from ..nearfield import NearField, TorusPairs
+from ..objective import SumObjective
+from ..torus import check_weights, torus_near_kernel, torus_problem, torus_scale
+from .start import MIN_CURVE_VERTICES, initial_loop
+from .terms import CurveNodes, SpeedConstraint, curve_neighbours
 
 # Default length: L = c sqrt(M W H) pixels, c = LENGTH_FACTOR (rho / REFERENCE_DENSITY)**-LENGTH_EXPONENT with
 # rho = M / (W H) vertices per pixel, clipped to LENGTH_FACTOR_RANGE. Measured on the tuning images (portrait and
@@ -75,6 +74,21 @@ MAX_PHASES = 8
 MARGIN_SPACINGS = 2.0
 
 
+@dataclass
+class LineProblem(Problem):
+    """A ``Problem`` whose points are the vertices of one closed curve, in path order.
+
+    ``speed`` is the speed penalty (``stipple.line.terms.SpeedConstraint``) and ``step`` the segment length
+    ``h = L / M`` it holds the segments to (unit lengths of the padded torus), ``length`` the curve's length ``L``
+    in pixels and ``pixels_per_unit`` the padded image's longer side, in pixels.
+    """
+
+    speed: object = None
+    step: float = 0.0
+    length: float = 0.0
+    pixels_per_unit: int = 0
+
+
 def default_length(n_vertices, weights):
     """Default curve length in pixels: ``c sqrt(M W H)`` with ``c`` from the vertex density (see ``length_factor``),
     at most ``FILL_COVERAGE`` times the length that covers the darkest tone once, ``A = sum w / t`` (1-px pen;
@@ -111,10 +125,9 @@ def check_subdivisions(subdivisions):
 
 def darkest_tone(weights):
     """The density that the darkest ``DARKEST_MASS_SHARE`` of the ink reaches: the largest ``t`` with at least that
-    share of ``sum w`` in pixels of ``w >= t`` (robust to a few outlying pixels, unlike ``max w``)."""
-    values = np.sort(weights, axis=None)[::-1]
-    reached = np.searchsorted(np.cumsum(values), DARKEST_MASS_SHARE * values.sum())
-    return float(values[min(reached, values.size - 1)])
+    share of ``sum w`` in pixels of ``w >= t`` (robust to a few outlying pixels, unlike ``max w``;
+    ``stipple.halftone.darkest_level``)."""
+    return darkest_level(weights, mass_fraction=DARKEST_MASS_SHARE)[0]
 
 
 def default_line_bandwidth(length, weights):
@@ -169,9 +182,13 @@ def line_problem(
 
     Returns
     -------
-    Problem
+    LineProblem
         ``objective = SumObjective(CurveNodes(discrepancy), CurveNodes(near field), speed)``;
         ``settings['domain'] == 'line'``.
+
+    The discrepancy is the dots' (``stipple.torus.torus_problem`` of the padded image with ``M K`` nodes: the
+    same checks, coefficients, kernel and settings); the near field is the curve's own, which leaves out
+    neighbours along the curve.
     """
     weights = check_weights(weights)
     n_vertices = check_count(n_vertices)
@@ -217,7 +234,7 @@ def line_problem(
         "subdivisions": subdivisions,
         "margin": margin,
     }
-    problem = Problem(
+    return LineProblem(
         domain="torus",
         manifold=rectangle,
         objective=SumObjective(CurveNodes(discrepancy, subdivisions), CurveNodes(near, subdivisions), speed),
@@ -226,10 +243,11 @@ def line_problem(
         bandwidth=dots.bandwidth,
         sample=lambda rng, count: rectangle.inward(initial_loop(weights, count, int(rng.integers(2**31)), threads)),
         settings=settings,
+        speed=speed,
+        step=step,
+        length=length,
+        pixels_per_unit=longest,
     )
-    problem.speed, problem.step, problem.length = speed, step, length
-    problem.pixels_per_unit = longest
-    return problem
 
 
 def penalty_scale(vertex_weight, n_vertices):
@@ -239,173 +257,3 @@ def penalty_scale(vertex_weight, n_vertices):
     measured, the penalty balances the discrepancy near ``1e-7`` of this unit (``INITIAL_PENALTY``).
     """
     return float(vertex_weight**2 * n_vertices)
-
-
-def segment_ratio(problem, points):
-    """``max |p_{i+1} - p_i|`` over the allowed ``h`` and over the mean segment, at ``points``."""
-    problem.speed.set_points(points)
-    lengths = problem.speed.segment_lengths()
-    return float(lengths.max() / problem.step), float(lengths.max() / lengths.mean())
-
-
-def read_checkpoint_settings(path):
-    """The ``settings`` saved in a checkpoint (to rebuild the phase it was written in), or ``{}``."""
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            return json.loads(str(archive["metadata"])).get("settings", {})
-    except (OSError, ValueError, KeyError, EOFError):
-        return {}
-
-
-def draw_line(
-    image,
-    n_vertices,
-    length=None,
-    bandwidth=None,
-    *,
-    seed=0,
-    init=None,
-    tol=1e-4,
-    iterations=LINE_ITERATIONS,
-    phase_iterations=None,
-    constraint_tol=0.01,
-    initial_penalty=INITIAL_PENALTY,
-    time_limit=None,
-    callback=None,
-    checkpoint=None,
-    checkpoint_seconds=None,
-    checkpoint_iterations=None,
-    resume=False,
-    beta="hestenes-stiefel",
-    threads=None,
-    epsilon=1e-9,
-    backend="ducc0",
-    subdivisions=None,
-):
-    """One closed curve with ``n_vertices`` vertices whose length measure reproduces ``image``.
-
-    Phase 0 runs CG with penalty weight ``initial_penalty`` (in units of ``penalty_scale``) for up to
-    ``iterations``; every following phase multiplies it by 8 and runs up to ``phase_iterations`` more (default
-    ``iterations // 4``), until the longest segment is within ``constraint_tol`` of ``h = L / M``.
-
-    Parameters
-    ----------
-    image : array_like of shape (H, W), or a path
-        Density (``stipple.load_density``).
-    n_vertices : int
-    length : float, optional
-        Curve length bound L in pixels (default ``default_length``: ``c sqrt(M W H)``, c 0.6-1.1, at most
-        1.1 ``sum w / t``, ``t`` the darkest tone).
-    bandwidth : int, optional
-    init : array_like, optional
-        Starting vertices in unit coordinates (default: ``initial_loop``).
-    tol, iterations, time_limit, callback, checkpoint, checkpoint_seconds, checkpoint_iterations, resume, beta :
-        As for ``stipple.halftone.run``; ``time_limit`` counts over all phases.
-    subdivisions : int, optional
-        Quadrature nodes per segment (``line_problem``).
-
-    Returns
-    -------
-    HalftoneResult
-        ``points`` (M, 2) in unit coordinates of the image, in path order; ``state`` of the last phase. Also
-        ``problem`` and ``penalty`` of the last phase, and ``segment_lengths`` in pixels.
-    """
-    import os
-    import time
-
-    from .halftone import _chain
-    from .io.checkpoint import Checkpointer
-    from .io.images import load_density
-
-    if isinstance(image, (str, os.PathLike)):
-        image = load_density(image)
-    weights = check_weights(image)
-    phase_iterations = max(1, iterations // 4) if phase_iterations is None else phase_iterations
-    penalty = initial_penalty
-    if resume and checkpoint is not None:
-        penalty = float(read_checkpoint_settings(checkpoint).get("penalty", 1.0))
-
-    def build(weight):
-        return line_problem(
-            weights,
-            n_vertices,
-            length,
-            bandwidth,
-            penalty=weight,
-            threads=threads,
-            epsilon=epsilon,
-            backend=backend,
-            subdivisions=subdivisions,
-        )
-
-    problem = build(penalty)
-    if init is None:
-        init = initial_loop(weights, problem.n_points, seed=seed, threads=threads)
-    init = problem.manifold.inward(init)
-    started = time.perf_counter()
-    result = run(
-        problem,
-        init=init,
-        tol=tol,
-        iterations=iterations,
-        time_limit=time_limit,
-        callback=callback,
-        checkpoint=checkpoint,
-        checkpoint_seconds=checkpoint_seconds,
-        checkpoint_iterations=checkpoint_iterations,
-        resume=resume,
-        beta=beta,
-    )
-    for _ in range(MAX_PHASES):
-        if constraints_hold(problem, result.points, constraint_tol) or result.status == "stopped":
-            break
-        remaining = None if time_limit is None else time_limit - (time.perf_counter() - started)
-        if remaining is not None and remaining <= 0:
-            break
-        penalty *= PENALTY_GROWTH
-        problem = build(penalty)
-        saver = None
-        if checkpoint is not None:
-            saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)
-        result = run(
-            problem,
-            init=result.points,
-            tol=tol,
-            iterations=phase_iterations,
-            time_limit=remaining,
-            callback=_chain(saver, callback),
-            beta=beta,
-        )
-        if saver is not None:
-            saver.save(result.state)
-    result.seconds = time.perf_counter() - started
-    result.problem, result.penalty = problem, penalty
-    problem.speed.set_points(result.points)
-    result.segment_lengths = problem.speed.segment_lengths() * problem.pixels_per_unit
-    result.points = problem.manifold.outward(result.points)
-    return result
-
-
-def constraints_hold(problem, points, constraint_tol):
-    """Every segment within ``(1 ± constraint_tol) h``."""
-    problem.speed.set_points(points)
-    return np.abs(problem.speed.segment_lengths() / problem.step - 1).max() <= constraint_tol
-
-
-def line_points(points):
-    """Vertices in the unit rectangle (``Rectangle`` keeps them there; a given ``init`` is clipped on entry)."""
-    return np.clip(points, 0.0, 1.0)
-
-
-__all__ = [
-    "CurveNodes",
-    "HalftoneResult",
-    "SpeedConstraint",
-    "closed_length",
-    "darkest_tone",
-    "draw_line",
-    "hilbert_index",
-    "initial_loop",
-    "line_problem",
-    "resample_closed",
-]

@@ -16,10 +16,10 @@ from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
-from ..errors import StippleError
-from ..optimize import CGState
-from .commit import atomic_write
-from .images import load_array
+from .errors import StippleError
+from .io.commit import atomic_write
+from .io.images import load_array
+from .optimize import CGState
 
 FORMAT = "stipple-checkpoint"
 VERSION = 1
@@ -249,3 +249,13 @@ class Checkpointer:
         save_checkpoint(self.path, state, self.problem)
         self.last_time = time.monotonic()
         self.last_iteration = state.iteration
+
+
+def saved_settings(path):
+    """The ``settings`` a checkpoint was saved with (to rebuild the problem it was written for), or ``{}`` where
+    the file cannot be read as a checkpoint (``load_checkpoint`` then says why)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return _metadata(path, _MemberReader(path, archive).text("metadata", MAX_METADATA_BYTES))["settings"]
+    except (StippleError, OSError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError):
+        return {}

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .tone import fit_inside, tone_radii_layers
+from ..tone import fit_inside, tone_radii_layers
 
 TOUCH_FRACTION = 0.45
 MIN_SQUASH = 0.02
