@@ -16,8 +16,9 @@ import numpy as np
 from PIL import Image
 
 from stipple.colour import halftone_colour
-from stipple.io.writers import layered_torus_output
 from stipple.measures.evaluate import discrepancy_energy, expected_iid_energy, torus_clumps
+from stipple.pipelines.colour import ink_layers
+from stipple.pipelines.outputs import layered_files
 
 
 def load(path, size):
@@ -68,15 +69,11 @@ def measure(rgb, n_points, iterations, union_weight):
 
 
 def pictures(layers, problem, result, shape, directory):
-    placed = [
-        (layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, problem.slices, strict=True)
-    ]
-    ink = sum(layer.density for layer in layers).mean()
-    dots = layered_torus_output(placed, shape, ".png", ink=ink, png_width=512)
+    placed, ink = ink_layers(layers, problem, result)
+    dots = layered_files(placed, shape, [".png"], {"png_width": 512}, ink=ink)[".png"]
     (directory / "colour-astronaut.png").write_bytes(dots)
-    preview = layered_torus_output(
-        placed, shape, ".png", ink=ink, png_width=2048, dot_style="filled", pen_width=(0.25, "mm")
-    )
+    pen = {"png_width": 2048, "dot_style": "filled", "pen_width": (0.25, "mm")}
+    preview = layered_files(placed, shape, [".png"], pen, ink=ink)[".png"]
     image = Image.open(__import__("io").BytesIO(preview))
     image.crop((820, 300, 1320, 700)).save(directory / "colour-plotter-filled.png", optimize=True)
 

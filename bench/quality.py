@@ -154,8 +154,8 @@ def iterations_from(stderr):
 def evaluate(domain, input_path, points_path, count):
     """The library's evaluation of the points; returns the report dict and the points (unit / vectors)."""
     from stipple.io.images import load_density
-    from stipple.io.points import read_points
     from stipple.measures.evaluate import evaluate_sphere, evaluate_torus
+    from stipple.pipelines.inputs import read_points
 
     _, points = read_points(str(points_path))
     if domain == "torus":

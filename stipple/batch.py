@@ -1,8 +1,9 @@
 """Batches of images: each stippled exactly as ``stipple torus`` would, written as ``DIR/<stem>.<ext>``, one after
 the other here or one task per image on a Dask distributed cluster.
 
-``stipple_image`` is the one path from an image to its outputs' bytes; ``run_job`` writes one image's outputs
-all-or-nothing (temporary files beside them, then renamed), so that every output file that exists is whole.
+``stipple.pipelines.image.stipple_image`` is the one path from an image to its outputs' bytes; ``run_job`` writes
+one image's outputs all-or-nothing (temporary files beside them, then renamed), so that every output file that
+exists is whole.
 An image is *done* when all its outputs exist and none is older than the image (``is_done``): a rerun of a batch
 skips those and redoes the rest, including the image a killed worker was working on.
 """
@@ -11,16 +12,12 @@ import os
 import stat
 import time
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .errors import StippleError
-from .halftone import run
 from .io.commit import commit_outputs
-from .io.images import load_input
-from .io.png import check_png_outputs
-from .io.points import read_torus_init
 from .io.safety import check_distinct
-from .render.pen import physical_centres, plotter_order
+from .pipelines.image import stipple_image
 
 FORMATS = ("csv", "png", "svg")
 # Exit status of a batch in which some images failed: FAILED_BASE + the number failed, at most FAILED_BASE +
@@ -31,101 +28,13 @@ CONNECT_TIMEOUT = 10
 
 
 @dataclass(frozen=True)
-class TorusRecipe:
-    """What ``stipple torus`` does to one image, as plain keyword dictionaries (picklable, for remote workers).
-
-    Attributes
-    ----------
-    load : dict
-        Keywords of ``stipple.io.images.load_input`` (invert, gamma, value_range, levels).
-    problem : dict
-        Keywords of ``stipple.torus.torus_problem`` after the weights: n_points, bandwidth, backend, threads,
-        epsilon, hessian, near_field.
-    solve : dict
-        Keywords of ``stipple.halftone.run`` (init as "stratified", "density" or "uniform", seed, tol, iterations,
-        time_limit, safeguard, beta, correct, settle).
-    draw : dict
-        Keywords of ``stipple.io.writers.torus_output`` (width, dot_radius, png_width, background, color,
-        dot_style, pen_width, style).
-    order : bool
-        Reorder the dots along a short pen path (``--order``).
-    """
-
-    load: dict = field(default_factory=dict)
-    problem: dict = field(default_factory=dict)
-    solve: dict = field(default_factory=dict)
-    draw: dict = field(default_factory=dict)
-    order: bool = False
-
-
-@dataclass
-class ImageOutputs:
-    """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
-    optimiser's ``HalftoneResult``."""
-
-    files: dict
-    result: object
-
-
-def stipple_image(image, formats, recipe, callback=None):
-    """Stipple ``image`` (a path) as ``stipple torus`` does and draw it in every format of ``formats``.
-
-    Parameters
-    ----------
-    image : str
-        Path of the image (PNG, JPEG, ..., or a .npy map).
-    formats : iterable of str
-        Output formats with their dot: ".csv", ".png", ".svg".
-    recipe : TorusRecipe
-    callback : callable, optional
-        ``callback(state)`` after every CG iteration; returning True stops the run (``stipple.optimize``).
-
-    Returns
-    -------
-    ImageOutputs
-    """
-    formats = list(formats)
-    weights = load_input(image, **recipe.load)
-    problem = image_problem(weights, formats, recipe)
-    solve_options = dict(recipe.solve)
-    init = read_torus_init(solve_options.pop("init", "stratified"), weights.shape)
-    result = run(problem, init=init, callback=callback, **solve_options)
-    points = pen_order(result.points, weights.shape, recipe) if recipe.order else result.points
-    return ImageOutputs(draw_image(points, weights, formats, recipe), result)
-
-
-def image_problem(weights, formats, recipe):
-    """The torus problem of the density ``weights`` with ``recipe.problem``'s settings, once the PNG canvas that
-    ``formats`` need is known to fit in memory."""
-    from .torus import torus_problem
-
-    settings = dict(recipe.problem)
-    n_points = settings.pop("n_points")
-    check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
-    return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
-
-
-def pen_order(points, shape, recipe):
-    """``points`` reordered along a short pen path on the drawing's physical canvas."""
-    order, _, _ = plotter_order(physical_centres(points, shape, recipe.draw.get("width", (200.0, "mm"))))
-    return points[order]
-
-
-def draw_image(points, weights, formats, recipe):
-    """{format: bytes} of torus ``points`` placed from the density ``weights``, drawn with ``recipe.draw``."""
-    from .io.writers import torus_output
-
-    return {fmt: torus_output(points, weights.shape, fmt, darkness=weights, **recipe.draw) for fmt in formats}
-
-
-@dataclass(frozen=True)
 class BatchJob:
     """One image of a batch: its absolute path, its outputs as ``(format, absolute path)`` pairs, what to do to
-    it, and its name as given (in messages)."""
+    it (a ``stipple.pipelines.image.TorusRecipe``), and its name as given (in messages)."""
 
     image: str
     outputs: tuple
-    recipe: TorusRecipe
+    recipe: object
     name: str = ""
 
 

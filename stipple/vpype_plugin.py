@@ -16,28 +16,26 @@ import vpype_cli
 from .colour import halftone_colour, parse_palette
 from .errors import StippleError
 from .line import LINE_ITERATIONS
+from .pipelines.colour import ink_layers
 from .render.dots import flat_dots
 from .render.pen import dot_paths
 from .render.styles import DOT_STYLES
 
 
-def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
+def pen_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
     """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
 
     ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
     together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
-    nearest dot, and every dot lies inside the image (``stipple.drawing.flat_dots``).
+    nearest dot, and every dot lies inside the image (``stipple.render.dots.flat_dots``).
     """
     layers, problem, result = halftone_colour(image, n_points, separation=parse_palette(separation), **options)
     rows, columns = layers[0].density.shape
     scale = width / columns
-    ink = sum(layer.density for layer in layers).mean()
+    inks, ink = ink_layers(layers, problem, result)
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
-    placed = [
-        (layer.name, layer.colour, result.points[part] * np.array([columns, rows]) * scale)
-        for layer, part in zip(layers, problem.slices, strict=True)
-    ]
+    placed = [(name, colour, points * np.array([columns, rows]) * scale) for name, colour, points in inks]
     dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
@@ -67,7 +65,7 @@ def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle",
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
-        drawn, height = ink_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
+        drawn, height = pen_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     for name, colour, paths in drawn:

@@ -78,7 +78,7 @@ RACE = ["torus", str(ROOT / "samples" / "camera128.png"), "-M", "2000", "-N", "1
 # within milliseconds of each other however loaded the machine is.
 STARTER = """
 import os, sys, time
-import stipple.cli, stipple.torus, stipple.checkpoint, stipple.batch
+import stipple.cli, stipple.torus, stipple.checkpoint, stipple.pipelines.image
 go = sys.argv[1]
 while not os.path.exists(go):
     time.sleep(0.001)

@@ -10,7 +10,8 @@ import click
 from ..errors import StippleError
 from ..io.commit import check_writable
 from .defaults import INITS
-from .torus import torus, torus_recipe
+from .recipes import torus_recipe
+from .torus import torus
 
 # Options of ``stipple torus`` that name one image's files or its checkpoint, or its inks: not a batch's.
 NOT_BATCH = {

@@ -62,8 +62,9 @@ def design(ctx, **options):
     """A numerical spherical design of strength t: M points whose equal-weight rule integrates every spherical
     harmonic of degree 1..t to within --error (CSV in full precision)."""
     from ..design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
-    from ..io.points import read_sphere_init
-    from ..io.writers import sphere_output
+    from ..io.commit import output_format
+    from ..pipelines.inputs import read_sphere_init
+    from ..pipelines.outputs import sphere_files
     from ..sphere import lon_lat
 
     started = time.perf_counter()
@@ -86,19 +87,17 @@ def design(ctx, **options):
             init = start_points(options["strength"], problem.n_points, init, options["seed"])
             result, stopped_by = solve(problem, options, init, stop=target)
             result = design_outcome(result, target)
-            write_outputs(
-                options["outputs"],
-                lambda fmt: sphere_output(
-                    result.points,
-                    lon_lat(result.points),
-                    fmt,
-                    coords=options["coords"],
-                    projection=options["projection"],
-                    view=view,
-                    ink=1.0,
-                    **settings,
-                ),
+            files = sphere_files(
+                result.points,
+                lon_lat(result.points),
+                [output_format(path) for path in options["outputs"]],
+                coords=options["coords"],
+                projection=options["projection"],
+                view=view,
+                ink=1.0,
+                **settings,
             )
+            write_outputs(options["outputs"], files)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

@@ -79,8 +79,8 @@ def evaluate(
     CSVs per ink and for all dots together. Given a drawn PICTURE.png instead of POINTS: its picture measures
     against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma)."""
     from ..io.png import spectrum_plot
-    from ..io.points import read_points
     from ..measures.reports import evaluation_report, format_report
+    from ..pipelines.inputs import read_points
 
     options = {
         "uniform": uniform,

@@ -23,11 +23,12 @@ from .supervise import finish, guarded_files, supervised, write_outputs
 @click.pass_context
 def line(ctx, image, **options):
     """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
+    from ..io.commit import output_format
     from ..io.images import load_input
-    from ..io.points import read_torus_init
     from ..io.units import parse_length
-    from ..io.writers import line_output
     from ..line import line_points
+    from ..pipelines.inputs import read_torus_init
+    from ..pipelines.outputs import line_files
 
     started = time.perf_counter()
     image = resolve_input(ctx, image)
@@ -45,12 +46,11 @@ def line(ctx, image, **options):
             init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
             result, stopped_by = solve_line(weights, options, init)
             points = line_points(result.points)
-            write_outputs(
-                options["outputs"],
-                lambda fmt: line_output(
-                    points, weights.shape, fmt, width=width, pen_width=pen_width, png_width=options["png_width"]
-                ),
+            formats = [output_format(path) for path in options["outputs"]]
+            files = line_files(
+                points, weights.shape, formats, width=width, pen_width=pen_width, png_width=options["png_width"]
             )
+            write_outputs(options["outputs"], files)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

@@ -45,8 +45,8 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
     import numpy as np
 
     from ..io.png import check_png_outputs
-    from ..io.points import read_points, torus_canvas
-    from ..io.writers import sphere_output, torus_output
+    from ..pipelines.inputs import read_points, torus_canvas
+    from ..pipelines.outputs import sphere_files, torus_files
     from ..render.dots import sphere_canvas
     from ..render.pen import physical_centres
     from ..sphere import lon_lat
@@ -62,17 +62,15 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
                 check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
                 points = plot_order(points, points, options, "radians")
                 degrees = lon_lat(points)
-                write_outputs(
-                    outputs,
-                    lambda fmt: sphere_output(
-                        points, degrees, fmt, coords=coords, projection=projection, view=angles, **settings
-                    ),
+                files = sphere_files(
+                    points, degrees, formats, coords=coords, projection=projection, view=angles, **settings
                 )
+                write_outputs(outputs, files)
                 return
             shape, darkness, points = torus_canvas(points, like, size, options["invert"])
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
-            write_outputs(outputs, lambda fmt: torus_output(unit, shape, fmt, darkness=darkness, **settings))
+            write_outputs(outputs, torus_files(unit, shape, formats, settings, darkness))
     except StippleError as error:
         raise click.ClickException(str(error)) from None

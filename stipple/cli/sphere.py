@@ -50,8 +50,8 @@ def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
     'builtin:gaussians' or 'builtin:rbf' (the paper's Figs. 5.4 and 5.5), or --uniform."""
     from ..io.png import check_png_outputs
-    from ..io.points import read_sphere_init
-    from ..io.writers import sphere_output
+    from ..pipelines.inputs import read_sphere_init
+    from ..pipelines.outputs import sphere_files
     from ..render.dots import sphere_canvas
     from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
 
@@ -87,20 +87,18 @@ def sphere(ctx, map_source, **options):
             result, stopped_by = solve(problem, options, read_sphere_init(options["init"]))
             points = plot_order(result.points, result.points, options, "radians")
             degrees = lon_lat(points)
-            write_outputs(
-                options["outputs"],
-                lambda fmt: sphere_output(
-                    points,
-                    degrees,
-                    fmt,
-                    coords=options["coords"],
-                    projection=options["projection"],
-                    view=view,
-                    ink=density.mean,
-                    darkness_at=picture_darkness(density),
-                    **settings,
-                ),
+            files = sphere_files(
+                points,
+                degrees,
+                formats,
+                coords=options["coords"],
+                projection=options["projection"],
+                view=view,
+                ink=density.mean,
+                darkness_at=picture_darkness(density),
+                **settings,
             )
+            write_outputs(options["outputs"], files)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

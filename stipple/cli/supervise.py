@@ -141,9 +141,9 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=()):
         yield
 
 
-def write_outputs(paths, render):
-    """Render every output in memory, then write them all-or-nothing (``-`` is stdout)."""
-    commit_outputs([(path, render(output_format(path))) for path in paths])
+def write_outputs(paths, files):
+    """Write every output all-or-nothing (``-`` is stdout): ``files`` maps each format to its bytes."""
+    commit_outputs([(path, files[output_format(path)]) for path in paths])
 
 
 def solve(problem, options, init, stop=None):
@@ -242,9 +242,9 @@ def plot_order(centres, points, options, unit):
     """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
     if not options.get("order"):
         return points
-    from ..render.pen import plotter_order
+    from ..render.pen import pen_order
 
-    order, before, after = plotter_order(centres)
+    points, before, after = pen_order(points, centres)
     if not options.get("quiet"):
         click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {unit}", err=True)
-    return points[order]
+    return points

@@ -5,10 +5,9 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.commit import output_format
 from .defaults import BACKENDS
-from .options import common_options, init_input, palette_options, parse_levels, render_settings, resolve_input
-from .supervise import finish, guarded_files, plot_order, solve, write_outputs
+from .options import common_options, init_input, palette_options, resolve_input
+from .recipes import colour_recipe, run_pipeline, torus_recipe
 
 
 @click.command()
@@ -51,67 +50,20 @@ def torus(ctx, image, **options):
     image = resolve_input(ctx, image)
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
-    if options["palette"] is not None:
-        from .colour import run_colour
-
-        return run_colour(image, options, started)
-    from ..batch import draw_image, image_problem
-    from ..io.images import load_input
-    from ..io.points import read_torus_init
-    from ..render.pen import physical_centres
-
     try:
+        if options["palette"] is not None:
+            from ..pipelines.colour import stipple_colour
+
+            return run_pipeline(stipple_colour, image, colour_recipe(options), options, [("image", image)], started)
+        from ..pipelines.image import stipple_image
+
         recipe = torus_recipe(options)
-        width = recipe.draw["width"]
         inputs = [("image", image), init_input(options["init"])]
-        with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
-            weights = load_input(image, **recipe.load)
-            tone_hints(weights, options)
-            problem = image_problem(weights, [output_format(path) for path in options["outputs"]], recipe)
-            result, stopped_by = solve(problem, options, read_torus_init(options["init"], weights.shape))
-            points = plot_order(physical_centres(result.points, weights.shape, width), result.points, options, width[1])
-            write_outputs(options["outputs"], lambda fmt: draw_image(points, weights, [fmt], recipe)[fmt])
+        run_pipeline(
+            stipple_image, image, recipe, options, inputs, started, lambda weights: tone_hints(weights, options)
+        )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
-    finish(result, stopped_by, options, started)
-
-
-def torus_recipe(options):
-    """What ``stipple torus`` does to an image with these options, as a ``stipple.batch.TorusRecipe`` (the
-    run's stopping, checkpoint and progress options are ``solve``'s)."""
-    from ..batch import TorusRecipe
-    from ..torus import DEFAULT_EPSILON
-
-    return TorusRecipe(
-        load={
-            "invert": options["invert"],
-            "gamma": options["gamma"],
-            "value_range": options["value_range"],
-            "levels": parse_levels(options["levels"]),
-        },
-        problem={
-            "n_points": options["n_points"],
-            "bandwidth": options["bandwidth"],
-            "backend": options["backend"],
-            "threads": options["threads"],
-            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
-            "hessian": options["hessian"],
-            "near_field": options["near_field"] is not False,
-        },
-        solve={
-            "init": options["init"],
-            "seed": options["seed"],
-            "tol": options["tol"],
-            "iterations": options["iterations"],
-            "time_limit": options["time_limit"],
-            "safeguard": options["safeguard"],
-            "beta": options["beta"],
-            "correct": options["correct"],
-            "settle": options["settle"],
-        },
-        draw=render_settings(options),
-        order=bool(options["order"]),
-    )
 
 
 # Hints on stderr, never a silent change: a faint document (its gray values span less than this) and a mostly

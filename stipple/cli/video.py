@@ -56,7 +56,7 @@ def video(ctx, source, **options):
     i), -o 'frames/%04d.png' (one PNG or SVG per frame)."""
     from ..io.png import check_png_outputs
     from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
-    from ..io.writers import torus_output
+    from ..pipelines.outputs import torus_files
 
     started = time.perf_counter()
     source = resolve_input(ctx, source)
@@ -78,7 +78,7 @@ def video(ctx, source, **options):
             fps = options["fps"] or frames.fps or DEFAULT_FPS
 
             def draw(points, density, fmt):
-                return torus_output(points, frames.shape, fmt, darkness=density, **settings)
+                return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
 
             with VideoOutputs(plan, frames.shape, draw, fps) as outputs:
                 result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
@@ -92,7 +92,7 @@ def video(ctx, source, **options):
 def video_settings(options, shape):
     """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
     from ..halftone import check_integer
-    from ..io.points import read_torus_init
+    from ..pipelines.inputs import read_torus_init
     from ..video import VideoSettings
 
     check_integer("seed", options["seed"], 0, 2**63 - 1)

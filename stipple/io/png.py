@@ -7,7 +7,6 @@ from PIL import Image, ImageDraw
 
 from .. import allocator
 from ..errors import StippleError
-from ..render.dots import ellipse_polygon
 from .units import WHITE
 
 SUPERSAMPLE = 4
@@ -163,3 +162,11 @@ def _coverage(dots, canvas_size, scale, pen_width):
                 ellipse_polygon(centre - 0.5, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
             )
     return mask
+
+
+def ellipse_polygon(centre, radius, squash=1.0, angle=0.0, segments=24):
+    """Vertices ``[(x, y), ...]`` of a dot's outline (an ellipse when ``squash < 1``)."""
+    t = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    local = radius * (squash * np.cos(t) + 1j * np.sin(t)) * np.exp(1j * angle)
+    z = complex(centre[0], centre[1]) + local
+    return list(zip(z.real, z.imag, strict=True))

@@ -1,5 +1,5 @@
-"""Point CSVs: writing ``x,y`` / ``lon,lat`` / ``x,y,z`` / ``x,y,layer`` tables, and reading them back (as
-``stipple render``, ``evaluate`` and ``--init`` do) with every value checked."""
+"""Point CSVs: writing ``x,y`` / ``lon,lat`` / ``x,y,z`` / ``x,y,layer`` tables, and reading them back with every
+value checked (``read_table``; ``stipple.pipelines.inputs`` makes them torus or sphere points)."""
 
 import io
 import sys
@@ -7,9 +7,6 @@ import sys
 import numpy as np
 
 from ..errors import StippleError
-from ..halftone import INITS, MAX_POINTS
-from ..sphere import from_lon_lat
-from .images import load_input
 from .sources import read_source
 
 MAX_PIXEL_COORDINATE = 2**31
@@ -64,34 +61,14 @@ def read_points_csv(source, names):
     return points
 
 
-def read_torus_init(init, shape):
-    """``stratified``/``density``/``uniform``, or a CSV ``x,y`` in pixel units converted to unit coordinates."""
-    if init in INITS:
-        return init
-    domain, pixels = read_points(init)
-    if domain != "torus":
-        raise StippleError(f"{init}: --init for the torus needs a CSV with columns x,y (pixels)")
-    rows, columns = shape
-    return np.mod(pixels / np.array([columns, rows]), 1.0)
+def read_table(source, max_rows, labels=False):
+    """The points of a stipple CSV (``-`` is stdin), as its header names them: ``("xyz", unit vectors)``,
+    ``("lonlat", (M, 2) degrees)`` or ``("xy", pixels)``.
 
-
-def read_sphere_init(init):
-    """``density``/``uniform``, or a CSV of ``lon,lat`` degrees or ``x,y,z`` as unit vectors."""
-    if init in INITS:
-        return init
-    domain, points = read_points(init)
-    if domain != "sphere":
-        raise StippleError(f"{init}: --init for the sphere needs a CSV with columns lon,lat or x,y,z")
-    return points
-
-
-def read_points(source, labels=False):
-    """Points from a stipple CSV (``-`` is stdin): ``("torus", pixels)`` or ``("sphere", unit vectors)``.
-
-    The header decides: ``x,y,z`` and ``lon,lat`` are sphere points (latitudes in [-90, 90], no zero
-    vectors), ``x,y`` torus points in pixels (finite, below ``MAX_PIXEL_COORDINATE`` in size). With
-    ``labels``, also each torus point's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes),
-    or None: ``(domain, points, names)``.
+    ``x,y,z`` rows are scaled to unit length (no zero vectors), latitudes must lie in [-90, 90] and pixel
+    positions below ``MAX_PIXEL_COORDINATE`` in size; at most ``max_rows`` rows are read. With ``labels``, also
+    each ``x,y`` row's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes), or None:
+    ``(kind, points, names)``.
     """
     name = "<stdin>" if source == "-" else source
     data = read_source(sys.stdin.buffer if source == "-" else source)
@@ -102,18 +79,20 @@ def read_points(source, labels=False):
         stream = io.BytesIO(data)
         stream.name = name
         points = read_points_csv(stream, names)
-        if len(points) > MAX_POINTS:
-            raise StippleError(f"{name}: {len(points)} points; at most {MAX_POINTS} are read")
+        if len(points) > max_rows:
+            raise StippleError(f"{name}: {len(points)} points; at most {max_rows} are read")
         return points
 
     if {"x", "y", "z"} <= columns:
-        found = "sphere", unit_rows(table(("x", "y", "z")), name)
+        found = "xyz", unit_rows(table(("x", "y", "z")), name)
         return (*found, None) if labels else found
     if {"lon", "lat"} <= columns:
-        longitude, latitude = table(("lon", "lat")).T
-        if np.any(np.abs(latitude) > 90):
-            raise StippleError(f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(latitude).max():g}")
-        found = "sphere", from_lon_lat(longitude, latitude)
+        degrees = table(("lon", "lat"))
+        if np.any(np.abs(degrees[:, 1]) > 90):
+            raise StippleError(
+                f"{name}: latitudes must lie in [-90, 90] degrees, not up to {np.abs(degrees[:, 1]).max():g}"
+            )
+        found = "lonlat", degrees
         return (*found, None) if labels else found
     if {"x", "y"} <= columns:
         pixels = table(("x", "y"))
@@ -123,8 +102,8 @@ def read_points(source, labels=False):
                 f"not {np.abs(pixels).max():g}"
             )
         if not labels:
-            return "torus", pixels
-        return "torus", pixels, read_labels(data, columns, len(pixels), name)
+            return "xy", pixels
+        return "xy", pixels, read_labels(data, columns, len(pixels), name)
     raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
 
 
@@ -160,19 +139,3 @@ def parse_size(text):
     if not (1 <= width < MAX_PIXEL_COORDINATE and 1 <= height < MAX_PIXEL_COORDINATE):
         raise StippleError(f"size must be WIDTH,HEIGHT with each in [1, {MAX_PIXEL_COORDINATE - 1}], not {text!r}")
     return height, width
-
-
-def torus_canvas(pixels, like, size, invert=False):
-    """``(shape, darkness, pixels)`` of torus points: the canvas of ``--like`` (and its density, the tone to
-    draw, inverted with ``invert``) or ``--size`` (no density) with the points wrapped onto it, or by default
-    the smallest canvas from the origin that holds every point."""
-    if like is None and size is None:
-        shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
-        return (max(shape[0], 1), max(shape[1], 1)), None, pixels
-    darkness = None
-    if like is not None:
-        darkness = load_input(like, invert=invert)
-        shape = darkness.shape
-    else:
-        shape = parse_size(size)
-    return shape, darkness, np.mod(pixels, np.array([shape[1], shape[0]]))

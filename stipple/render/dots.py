@@ -135,14 +135,6 @@ def squash_paths(paths, dots):
     return squashed
 
 
-def ellipse_polygon(centre, radius, squash=1.0, angle=0.0, segments=24):
-    """Vertices ``[(x, y), ...]`` of a dot's outline (an ellipse when ``squash < 1``)."""
-    t = np.linspace(0, 2 * np.pi, segments, endpoint=False)
-    local = radius * (squash * np.cos(t) + 1j * np.sin(t)) * np.exp(1j * angle)
-    z = complex(centre[0], centre[1]) + local
-    return list(zip(z.real, z.imag, strict=True))
-
-
 def ink_radius(ink_area, count):
     """Radius at which ``count`` discs cover ``ink_area`` (the density's mass): the mean tone is kept."""
     return float(np.sqrt(ink_area / (np.pi * count)))
@@ -151,7 +143,7 @@ def ink_radius(ink_area, count):
 ORTHO_SIZE = 1000.0
 
 
-def sphere_canvas(projection, fmt=".png"):
+def sphere_canvas(projection):
     """``(width, height)`` in user units of a sphere picture (SVG or PNG): the equirectangular map or the globe."""
     if projection == "equirect":
         return (ORTHO_SIZE * 2, ORTHO_SIZE)

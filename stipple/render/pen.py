@@ -78,6 +78,13 @@ def plotter_order(centres):
     return order, path_length(centres), path_length(centres[order])
 
 
+def pen_order(points, centres):
+    """``points`` reordered along a short pen path through ``centres`` (their places on the drawing), and the
+    pen-up travel before and after, in the units of ``centres``."""
+    order, before, after = plotter_order(centres)
+    return points[order], before, after
+
+
 def physical_centres(points, shape, width):
     """Torus points (unit coordinates of an image of ``shape = (H, W)``) on the SVG's physical canvas, in the
     unit of ``width = (value, unit)``."""

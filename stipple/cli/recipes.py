@@ -1,0 +1,120 @@
+"""What ``stipple torus``, ``colour`` and ``batch`` ask of the pipelines: the recipe of one image from the options,
+and the pipeline run under supervision (files guarded, progress, signals, summary), shared by the commands."""
+
+import click
+
+from ..errors import StippleError
+from ..io.commit import output_format
+from .defaults import INITS
+from .options import parse_levels, render_settings
+from .supervise import finish, guarded_files, solve, write_outputs
+
+
+def torus_recipe(options):
+    """What ``stipple torus`` does to an image with these options, as a ``stipple.pipelines.image.TorusRecipe``
+    (the run's stopping, checkpoint and progress options are ``solve``'s)."""
+    from ..pipelines.image import TorusRecipe
+    from ..torus import DEFAULT_EPSILON
+
+    return TorusRecipe(
+        load={
+            "invert": options["invert"],
+            "gamma": options["gamma"],
+            "value_range": options["value_range"],
+            "levels": parse_levels(options["levels"]),
+        },
+        problem={
+            "n_points": options["n_points"],
+            "bandwidth": options["bandwidth"],
+            "backend": options["backend"],
+            "threads": options["threads"],
+            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+            "hessian": options["hessian"],
+            "near_field": options["near_field"] is not False,
+        },
+        solve={
+            "init": options["init"],
+            "seed": options["seed"],
+            "tol": options["tol"],
+            "iterations": options["iterations"],
+            "time_limit": options["time_limit"],
+            "safeguard": options["safeguard"],
+            "beta": options["beta"],
+            "correct": options["correct"],
+            "settle": options["settle"],
+        },
+        draw=render_settings(options),
+        order=bool(options["order"]),
+    )
+
+
+def colour_recipe(options):
+    """What ``stipple colour`` does to an image with these options, as a ``stipple.pipelines.colour.ColourRecipe``:
+    options of the shared set that have no meaning for colour separation are refused, not ignored."""
+    from ..colour import parse_palette
+    from ..pipelines.colour import ColourRecipe
+    from ..torus import DEFAULT_EPSILON
+
+    check_colour_options(options)
+    palette = parse_palette(options["palette"])
+    draw = render_settings(options)
+    draw.pop("color")
+    return ColourRecipe(
+        problem={
+            "n_points": options["n_points"],
+            "bandwidth": options["bandwidth"],
+            "separation": palette,
+            "black": options["black"],
+            "union_weight": options["union_weight"],
+            "backend": options["backend"],
+            "threads": options["threads"],
+            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+            "hessian": options["hessian"],
+            "near_field": options["near_field"] is not False,
+        },
+        solve={"init": options["init"]},
+        draw=draw,
+        order=bool(options["order"]),
+    )
+
+
+def check_colour_options(options):
+    """Refuse the options that colour separation would ignore."""
+    if options["init"] not in INITS:
+        raise StippleError(
+            "--init must be stratified, density or uniform for colour separation (a start CSV is for one class); "
+            "stratified starts from i.i.d. samples of each ink"
+        )
+    if options["invert"] or options["value_range"] is not None:
+        raise StippleError("--invert and --range are for gray images and maps, not colour separation")
+    if options["gamma"] != 1.0 or options.get("levels") is not None:
+        raise StippleError("--gamma and --levels are for gray images and maps, not colour separation")
+    if options["color"] is not None or options["background"] is not None:
+        raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
+
+
+def run_pipeline(pipeline, image, recipe, options, inputs, started, inspect=None):
+    """``pipeline(image, formats, recipe, solve=...)`` with the files guarded, the run supervised (progress,
+    checkpoint, signals), the pen-up travel reported, the outputs committed and the summary printed."""
+    stopped = []
+
+    def supervised_solve(problem, init):
+        result, stopped_by = solve(problem, options, init)
+        stopped.append(stopped_by)
+        return result
+
+    with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
+        formats = [output_format(path) for path in options["outputs"]]
+        keywords = {} if inspect is None else {"inspect": inspect}
+        outputs = pipeline(image, formats, recipe, solve=supervised_solve, **keywords)
+        report_travel(outputs.travel, options, recipe)
+        write_outputs(options["outputs"], outputs.files)
+    finish(outputs.result, stopped[0], options, started)
+
+
+def report_travel(travel, options, recipe):
+    """One line per ordered layer: the pen-up travel before and after ``--order`` (unless ``--quiet``)."""
+    if options["quiet"]:
+        return
+    for before, after in travel:
+        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {recipe.draw['width'][1]}", err=True)

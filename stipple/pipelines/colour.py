@@ -1,0 +1,90 @@
+"""A colour image with one layer of dots per ink, as ``stipple colour`` (and ``stipple torus --palette``) make it:
+separation -> joint problem -> solve -> each ink's dots, ordered per pen -> layered drawing -> outputs."""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..colour import colour_problem
+from ..halftone import run
+from ..io.images import load_colour
+from ..io.png import check_png_canvas, default_png_width
+from ..render.pen import pen_order, physical_centres
+from .image import ImageOutputs
+from .outputs import layered_files
+
+# Canvas-sized images alive at once while the inks' picture is drawn (about 33 bytes a pixel).
+INK_PICTURE_LAYERS = 33
+
+
+@dataclass(frozen=True)
+class ColourRecipe:
+    """What ``stipple colour`` does to one image.
+
+    Attributes
+    ----------
+    problem : dict
+        Keywords of ``stipple.colour.colour_problem`` after the image: n_points, bandwidth, separation (a parsed
+        palette), black, union_weight, backend, threads, epsilon, hessian, near_field.
+    solve : dict
+        Keywords of ``stipple.halftone.run`` (init, seed, tol, ...).
+    draw : dict
+        Keywords of ``stipple.render.flat.layered_drawing`` (width, dot_radius, png_width, background,
+        dot_style, pen_width, style).
+    order : bool
+        Reorder each ink's dots along a short pen path (each pen draws its own layer).
+    """
+
+    problem: dict = field(default_factory=dict)
+    solve: dict = field(default_factory=dict)
+    draw: dict = field(default_factory=dict)
+    order: bool = False
+
+
+def ink_layers(layers, problem, result):
+    """``(name, colour, points)`` per ink (``points`` in unit coordinates, ``result.points[problem.slices[c]]``),
+    and the union's mean density: the ink that all the dots together lay down."""
+    placed = [
+        (layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, problem.slices, strict=True)
+    ]
+    return placed, sum(layer.density for layer in layers).mean()
+
+
+def stipple_colour(image, formats, recipe, *, solve=None):
+    """Separate ``image`` (a path) into inks, optimise their dots jointly and draw them in every format of
+    ``formats``; ``solve(problem, init)``, if given, runs the problem (``stipple.pipelines.image.stipple_image``).
+
+    Returns
+    -------
+    ImageOutputs
+        ``travel`` holds each ordered ink's pen-up travel before and after.
+    """
+    formats = list(formats)
+    rgb = load_colour(image)
+    settings = dict(recipe.problem)
+    n_points = settings.pop("n_points")
+    if ".png" in formats:
+        canvas = rgb.shape[1::-1]
+        check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
+    layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), **settings)
+    options = dict(recipe.solve)
+    result = run(problem, **options) if solve is None else solve(problem, options["init"])
+    placed, ink = ink_layers(layers, problem, result)
+    shape, travel = rgb.shape[:2], []
+    if recipe.order:
+        placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
+    coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
+    files = layered_files(placed, shape, formats, recipe.draw, ink=ink, coverages=coverages, target=rgb)
+    return ImageOutputs(files, result, travel)
+
+
+def ordered_layers(placed, shape, width):
+    """Each layer's points along a short pen path of its own (layers of fewer than 2 dots as they are), and the
+    pen-up travel before and after of each layer ordered."""
+    ordered, travel = [], []
+    for name, colour, points in placed:
+        if len(points) >= 2:
+            points, before, after = pen_order(points, physical_centres(points, shape, width))
+            travel.append((before, after))
+        ordered.append((name, colour, points))
+    return ordered, travel

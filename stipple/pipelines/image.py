@@ -1,0 +1,96 @@
+"""One image on the torus, as ``stipple torus`` and every image of ``stipple batch`` make it: the recipe, then
+load -> problem -> solve -> order -> drawing -> each output's bytes."""
+
+from dataclasses import dataclass, field
+
+from ..halftone import run
+from ..io.images import load_input
+from ..io.png import check_png_outputs
+from ..render.pen import pen_order, physical_centres
+from ..torus import torus_problem
+from .inputs import read_torus_init
+from .outputs import torus_files
+
+
+@dataclass(frozen=True)
+class TorusRecipe:
+    """What ``stipple torus`` does to one image, as plain keyword dictionaries (picklable, for remote workers).
+
+    Attributes
+    ----------
+    load : dict
+        Keywords of ``stipple.io.images.load_input`` (invert, gamma, value_range, levels).
+    problem : dict
+        Keywords of ``stipple.torus.torus_problem`` after the weights: n_points, bandwidth, backend, threads,
+        epsilon, hessian, near_field.
+    solve : dict
+        Keywords of ``stipple.halftone.run`` (init as "stratified", "density" or "uniform", seed, tol, iterations,
+        time_limit, safeguard, beta, correct, settle).
+    draw : dict
+        Keywords of ``stipple.render.flat.torus_drawing`` (width, dot_radius, png_width, background, color,
+        dot_style, pen_width, style).
+    order : bool
+        Reorder the dots along a short pen path (``--order``).
+    """
+
+    load: dict = field(default_factory=dict)
+    problem: dict = field(default_factory=dict)
+    solve: dict = field(default_factory=dict)
+    draw: dict = field(default_factory=dict)
+    order: bool = False
+
+
+@dataclass
+class ImageOutputs:
+    """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
+    optimiser's ``HalftoneResult`` (or what the caller's ``solve`` returned); ``travel`` the pen-up travel
+    before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it)."""
+
+    files: dict
+    result: object
+    travel: list = field(default_factory=list)
+
+
+def stipple_image(image, formats, recipe, *, solve=None, inspect=None):
+    """Stipple ``image`` (a path) as ``stipple torus`` does and draw it in every format of ``formats``.
+
+    Parameters
+    ----------
+    image : str
+        Path of the image (PNG, JPEG, ..., or a .npy map).
+    formats : iterable of str
+        Output formats with their dot: ".csv", ".png", ".svg".
+    recipe : TorusRecipe
+    solve : callable, optional
+        ``solve(problem, init)`` runs the problem and returns its result (the command line's supervised run,
+        with its checkpoint, progress and signals); default ``stipple.halftone.run`` with ``recipe.solve``.
+    inspect : callable, optional
+        ``inspect(weights)`` is shown the density once it is loaded (the command line's hints).
+
+    Returns
+    -------
+    ImageOutputs
+    """
+    formats = list(formats)
+    weights = load_input(image, **recipe.load)
+    if inspect is not None:
+        inspect(weights)
+    problem = image_problem(weights, formats, recipe)
+    options = dict(recipe.solve)
+    init = read_torus_init(options.pop("init", "stratified"), weights.shape)
+    result = run(problem, init=init, **options) if solve is None else solve(problem, init)
+    points, travel = result.points, []
+    if recipe.order:
+        width = recipe.draw.get("width", (200.0, "mm"))
+        points, before, after = pen_order(points, physical_centres(points, weights.shape, width))
+        travel.append((before, after))
+    return ImageOutputs(torus_files(points, weights.shape, formats, recipe.draw, weights), result, travel)
+
+
+def image_problem(weights, formats, recipe):
+    """The torus problem of the density ``weights`` with ``recipe.problem``'s settings, once the PNG canvas that
+    ``formats`` need is known to fit in memory."""
+    settings = dict(recipe.problem)
+    n_points = settings.pop("n_points")
+    check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
+    return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)

@@ -1,0 +1,113 @@
+"""Drawings on an image's flat canvas (user units: the image's pixels): torus dots of one ink or of several
+layered inks, and one closed line."""
+
+import numpy as np
+
+from ..io.png import default_png_width
+from ..io.units import BLACK, WHITE, to_user_units
+from .dots import flat_dots, ink_radius, squash_paths, tone_dots
+from .drawing import Drawing
+from .pen import dot_paths
+
+
+def torus_drawing(points, shape, *, darkness=None, color=BLACK, **options):
+    """The ``Drawing`` of torus ``points`` (unit coordinates) for an image of ``shape = (H, W)``: one layer of dots
+    in ``color`` (see ``layered_drawing``). ``darkness`` is the density ``w`` (H, W) the dots were placed from:
+    the ink the tone style reproduces."""
+    if darkness is not None:
+        options.setdefault("ink", float(np.mean(darkness)))
+        options["coverages"] = [darkness]
+    return layered_drawing([("dots", color, points)], shape, blend="over", **options)
+
+
+def layered_drawing(
+    layers,
+    shape,
+    *,
+    width=(200.0, "mm"),
+    dot_radius=None,
+    png_width=None,
+    ink=None,
+    dot_style="disc",
+    pen_width=(0.3, "mm"),
+    background=WHITE,
+    blend="multiply",
+    style="tone",
+    coverages=None,
+    target=None,
+):
+    """The ``Drawing`` of layered torus dots; ``layers`` are ``(name, colour, points)`` with points in unit
+    coordinates of an image of ``shape = (H, W)``, one Inkscape layer (one pen) per ink in the SVG.
+
+    ``style`` "tone" (given ``coverages``, each ink's target coverage (H, W), and filled discs): each dot's
+    radius makes the drawn ink reproduce its coverage, darks included (``stipple.render.dots.tone_dots``; with
+    ``target``, the (H, W, 3) colour the inks multiplied on white must print); dots crossing the edge move in.
+    "plotter": the radius that makes the dots' ink equal ``ink`` (the density's mean; 0.5 if unknown), capped
+    at 0.45 × the distance to the nearest dot of any layer, so no two dots touch, and the drawing inset by the
+    largest radius (``stipple.render.dots.flat_dots``). ``dot_radius`` (physical ``(value, unit)``) fixes every
+    radius. ``dot_style`` "disc" draws filled discs; "circle", "filled" and "point" pen paths ``pen_width`` wide
+    (a plotter preview in the PNG).
+    """
+    rows, columns = shape
+    count = sum(len(points) for _, _, points in layers)
+    placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
+    radius, stroke, pen = drawn_sizes(width, columns, dot_radius, dot_style, pen_width)
+    if style == "tone" and coverages is not None and radius is None and dot_style == "disc":
+        drawn = tone_dots(placed, (columns, rows), coverages, target=target)
+        notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii"]
+    else:
+        tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
+        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
+        drawn = with_pen_paths(drawn, dot_style, pen)
+        margin = _margin(drawn, stroke)
+        notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
+    return Drawing(
+        (columns, rows),
+        width,
+        png_width or default_png_width(count),
+        drawn,
+        background=background,
+        pen_width=pen,
+        blend=blend,
+        notes=tuple(notes),
+    )
+
+
+def line_drawing(points, shape, *, width=(200.0, "mm"), pen_width=None, png_width=None):
+    """The ``Drawing`` of a closed curve (vertices in unit coordinates, path order) for an image of ``shape``: one
+    closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``, default one input pixel),
+    ``png_width`` pixels wide as a PNG (default: the input's width × 4)."""
+    rows, columns = shape
+    pixels = np.asarray(points) * np.array([columns, rows])
+    stroke = 1.0 if pen_width is None else to_user_units(pen_width, width, columns)
+    return Drawing(
+        (columns, rows),
+        width,
+        png_width or 4 * columns,
+        notes=(f"one closed line, {len(pixels)} vertices",),
+        line=pixels,
+        stroke=stroke,
+    )
+
+
+def with_pen_paths(layers, dot_style, pen):
+    """The layers with pen paths (``stipple.render.pen.dot_paths``) for a pen style; unchanged for "disc"."""
+    if dot_style == "disc":
+        return layers
+    for dots in layers:
+        dots.paths = squash_paths(dot_paths(dots.centres, dots.radii, dot_style, pen), dots)
+    return layers
+
+
+def drawn_sizes(width, columns, dot_radius, dot_style, pen_width):
+    """The fixed radius (user units, or None for the default), the pen width of pen-drawn dots (None for
+    discs) and the pen width, in user units."""
+    radius = None if dot_radius is None else to_user_units(dot_radius, width, columns)
+    pen = to_user_units(pen_width, width, columns)
+    return radius, (pen if dot_style != "disc" else None), pen
+
+
+def _margin(layers, pen):
+    """The largest radius drawn (or half the pen), for the SVG's note."""
+    radii = [dots.radii.max() for dots in layers if len(dots.radii)]
+    return max(radii + [(pen or 0.0) / 2])

@@ -1,0 +1,113 @@
+"""Drawings of sphere points: the orthographic globe or the equirectangular map."""
+
+import numpy as np
+
+from ..io.png import default_png_width
+from ..io.units import BLACK, WHITE
+from .dots import (
+    GLOBE,
+    ORTHO_SIZE,
+    Dots,
+    angular_distances,
+    capped_radii,
+    equirectangular,
+    globe_dots,
+    inset,
+    orthographic,
+    projected_darkness,
+    sphere_canvas,
+    tone_dots,
+)
+from .drawing import Drawing
+from .flat import drawn_sizes, with_pen_paths
+
+
+def sphere_drawing(
+    points,
+    lon_lat,
+    *,
+    projection="ortho",
+    view=(0.0, 0.0),
+    width=(200.0, "mm"),
+    dot_radius=None,
+    png_width=None,
+    ink=None,
+    color=BLACK,
+    background=WHITE,
+    dot_style="disc",
+    pen_width=(0.3, "mm"),
+    style="tone",
+    darkness_at=None,
+):
+    """The ``Drawing`` of sphere ``points`` (unit vectors; ``lon_lat`` their degrees).
+
+    ``projection`` "equirect" draws every dot on the 2:1 map (inset from the edges like torus dots), "ortho" the
+    visible side of the globe around ``view = (lon, lat)``, each dot foreshortened towards the limb (an
+    ellipse), so the limb keeps its tone; the notes say how many dots are on the visible side. ``style``
+    "plotter" (or "tone" without ``darkness_at``, e.g. a uniform sphere): the angular radius that keeps the mean
+    tone (``ink``, 0.5 if unknown), capped at 0.45 × the great-circle distance to the nearest dot. "tone" with
+    ``darkness_at(lon, lat)`` (the map's darkness in [0, 1]): round dots sized on the drawn canvas so that the
+    picture has the map's tone, darks included (``stipple.render.dots.tone_dots`` against
+    ``projected_darkness``).
+    """
+    longitude, latitude = lon_lat
+    canvas = sphere_canvas(projection)
+    fixed, stroke, pen = drawn_sizes(width, canvas[0], dot_radius, dot_style, pen_width)
+    if style == "tone" and darkness_at is not None and fixed is None and dot_style == "disc":
+        drawn, notes = _tone_sphere(points, lon_lat, projection, view, color, darkness_at)
+        return _sphere_picture([drawn], canvas, projection, width, png_width, background, pen, notes)
+    per_radian = canvas[0] / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
+    tone = 2 * np.sqrt((0.5 if ink is None else ink) / max(len(points), 1))
+    angles = (
+        capped_radii(angular_distances(points), tone) if fixed is None else np.full(len(points), fixed / per_radian)
+    )
+    if projection == "equirect":
+        centres, margin = inset(
+            equirectangular(longitude, latitude, canvas[0]), canvas, per_radian * angles.max(initial=0)
+        )
+        drawn = Dots("dots", color, centres, np.minimum(angles * per_radian, margin))
+        notes = [f"{len(points)} dots, equirectangular (all of them)"]
+    else:
+        centres, depth = orthographic(points, view)
+        visible = depth > 0
+        half = ORTHO_SIZE / 2
+        drawn = globe_dots("dots", color, centres[visible], depth[visible], angles[visible], per_radian, (half, half))
+        notes = [
+            f"{int(visible.sum())} of {len(points)} dots on the visible side (orthographic, view "
+            f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
+        ]
+    layers = with_pen_paths([drawn], dot_style, pen)
+    return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes)
+
+
+def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
+    """One layer of tone-true round dots on the sphere picture's canvas, and the notes."""
+    canvas = sphere_canvas(projection)
+    if projection == "equirect":
+        centres = equirectangular(*lon_lat, canvas[0])
+        note = f"{len(points)} dots, equirectangular (all of them), tone-true radii"
+    else:
+        centres, depth = orthographic(points, view)
+        centres = centres[depth > 0]
+        note = (
+            f"{len(centres)} of {len(points)} dots on the visible side (orthographic, view "
+            f"{view[0]:g},{view[1]:g}), tone-true radii"
+        )
+    coverage = projected_darkness(darkness_at, projection, view)
+    return tone_dots([("dots", color, centres)], canvas, [coverage])[0], [note]
+
+
+def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes):
+    """The ``Drawing`` of a sphere picture's layers (the globe's outline under an orthographic PNG)."""
+    count = sum(len(dots.centres) for dots in layers)
+    low, high = (1 - GLOBE) / 2 * ORTHO_SIZE, (1 + GLOBE) / 2 * ORTHO_SIZE
+    return Drawing(
+        canvas,
+        width,
+        png_width or default_png_width(count),
+        layers,
+        background=background,
+        pen_width=pen,
+        notes=tuple(notes),
+        outline=(low, low, high, high) if projection == "ortho" else None,
+    )
