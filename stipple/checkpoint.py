@@ -17,8 +17,8 @@ from importlib.metadata import PackageNotFoundError, version
 import numpy as np
 
 from .errors import StippleError
+from .io.archive import MemberReader
 from .io.commit import atomic_write
-from .io.images import load_array
 from .optimize import CGState
 
 FORMAT = "stipple-checkpoint"
@@ -62,7 +62,6 @@ def save_checkpoint(path, state, problem):
 
 MAX_METADATA_BYTES = 1 << 20
 MAX_ITERATION = 10**9
-NPY_HEADER_ALLOWANCE = 1 << 12
 
 
 def load_checkpoint(path, problem):
@@ -124,55 +123,32 @@ def _read_checkpoint(path, archive, problem):
     )
 
 
-class _MemberReader:
-    """Reads ``NAME.npy`` members of a checkpoint archive with a size cap, as plain arrays (no pickles)."""
+class _MemberReader(MemberReader):
+    """Checkpoint members as checked values: arrays of a given shape, finite numbers, text."""
 
-    def __init__(self, path, archive):
-        self.path = path
-        self.archive = archive
-
-    def raw(self, name, limit):
-        """The member's bytes; refused without decompressing if it is stored as larger than ``limit``."""
-        try:
-            info = self.archive.getinfo(f"{name}.npy")
-        except KeyError:
-            raise StippleError(f"{self.path}: not a stipple checkpoint, or corrupt (no member {name})") from None
-        limit += NPY_HEADER_ALLOWANCE
-        if info.file_size > limit:
-            raise StippleError(
-                f"{self.path}: corrupt checkpoint (member {name} holds {info.file_size} bytes, "
-                f"at most {limit} expected)"
-            )
-        with self.archive.open(info) as stream:
-            return stream.read(limit + 1)
-
-    def value(self, name, limit, shape, kinds):
-        data = self.raw(name, limit)
-        try:
-            array = load_array(data, name, kinds=kinds)
-        except StippleError as error:
-            raise StippleError(f"{self.path}: corrupt checkpoint ({error})") from None
+    def checked(self, name, limit, shape, kinds):
+        array = self.value(name, limit, kinds)
         if array.shape != shape:
             raise StippleError(f"{self.path}: corrupt checkpoint ({name} has shape {array.shape}, not {shape})")
         return array
 
     def array(self, name, shape):
         """A finite float64 array of exactly ``shape``."""
-        array = self.value(name, 8 * math.prod(shape), shape, "f").astype(np.float64)
+        array = self.checked(name, 8 * math.prod(shape), shape, "f").astype(np.float64)
         if not np.all(np.isfinite(array)):
             raise StippleError(f"{self.path}: corrupt checkpoint (NaN or infinite values in {name})")
         return array
 
     def scalar(self, name, kinds):
         """A finite 0-d number of one of the dtype ``kinds`` ("f": float, "iu": integer) as float or int."""
-        value = self.value(name, 16, (), kinds)[()]
+        value = self.checked(name, 16, (), kinds)[()]
         if not np.isfinite(value):
             raise StippleError(f"{self.path}: corrupt checkpoint ({name} is {value})")
         return int(value) if kinds == "iu" else float(value)
 
     def text(self, name, limit):
         """A 0-d unicode string member."""
-        return str(self.value(name, limit, (), "U")[()])
+        return str(self.checked(name, limit, (), "U")[()])
 
 
 def _check_points(path, points, domain):

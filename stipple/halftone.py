@@ -8,6 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from . import allocator
+from .checks import check_integer, check_positive
 from .errors import StippleError
 from .optimize import BETAS, OptimizeResult, initial_state, minimize
 
@@ -65,15 +66,6 @@ def default_threads():
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def check_integer(name, value, low, high, *, even=False):
-    """``value`` as an int if it is an integer in [low, high] (and even, if asked), else a StippleError."""
-    integer = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    if not integer or not low <= value <= high or (even and value % 2):
-        kind = "an even integer" if even else "an integer"
-        raise StippleError(f"{name} must be {kind} in [{low}, {high}], not {value!r}")
-    return int(value)
-
-
 def check_count(n_points):
     return check_integer("number of points", n_points, 1, MAX_POINTS)
 
@@ -123,14 +115,6 @@ def check_epsilon(epsilon):
     if not isinstance(epsilon, (int, float, np.floating)) or not 1e-14 <= epsilon <= 1e-2:
         raise StippleError(f"epsilon must be a number in [1e-14, 1e-2], not {epsilon!r}")
     return float(epsilon)
-
-
-def check_positive(name, value, allow_none=False):
-    if value is None and allow_none:
-        return None
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
-        raise StippleError(f"{name} must be a positive number, not {value!r}")
-    return value
 
 
 def initial_points(problem, init, rng):

@@ -15,8 +15,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-# "stalled" is set by callers whose goal is more than a small gradient (spherical designs).
-STATUSES = ("converged", "settled", "max_iterations", "time_limit", "stopped", "no_descent", "stalled")
 # ``settle`` compares the energy with the one this many iterations before.
 SETTLE_WINDOW = 20
 BETAS = ("hestenes-stiefel", "daniel")

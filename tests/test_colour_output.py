@@ -52,7 +52,10 @@ def test_colour_writes_one_layer_per_ink_with_counts_by_mass(colour_image, tmp_p
 
 
 def test_colour_refuses_gray_only_options(colour_image):
+    """``stipple colour`` does not offer them; ``stipple torus --palette``, which does, refuses them."""
     result = run(["colour", colour_image[0], "-M", 50, "--invert", "-q"])
+    assert result.exit_code == 2 and "No such option '--invert'" in result.output
+    result = run(["torus", colour_image[0], "--palette", "cmyk", "-M", 50, "--invert", "-q"])
     assert result.exit_code == 1 and "not colour separation" in result.output
 
 

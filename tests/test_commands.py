@@ -26,6 +26,29 @@ def test_help(command):
     assert "--help" in result.output
 
 
+@pytest.mark.parametrize(
+    "command, option",
+    [
+        ("line", "--dot-style"),
+        ("line", "--order"),
+        ("line", "--dot-radius"),
+        ("line", "--near-field"),
+        ("line", "--safeguard"),
+        ("colour", "--invert"),
+        ("colour", "--color"),
+        ("design", "--order"),
+        ("design", "--style"),
+        ("video", "--order"),
+        ("video", "--verbose"),
+    ],
+)
+def test_a_command_offers_only_the_options_that_act_on_it(command, option):
+    """An option that would do nothing is not offered: a usage error naming it, not a silent no-op."""
+    result = run([command, option, "--help"])
+    assert result.exit_code == 2 and f"No such option '{option}'" in result.output, result.output
+    assert option not in run([command, "--help"]).output.replace(f"{option}-", "")
+
+
 def test_the_help_defaults_are_the_librarys():
     """``stipple.cli.defaults`` repeats the library's choices so that --help needs no numpy: each must match."""
     from stipple import halftone, optimize, transforms, video

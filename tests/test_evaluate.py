@@ -3,6 +3,7 @@ import pytest
 from click.testing import CliRunner
 
 from stipple.cli import main
+from stipple.design import fibonacci_lattice
 from stipple.measures.evaluate import (
     cap_discrepancy,
     density_at,
@@ -10,7 +11,6 @@ from stipple.measures.evaluate import (
     evaluate_sphere,
     evaluate_torus,
     expected_iid_energy,
-    fibonacci_sphere,
     light_threshold,
     minimum_separation,
     power_spectrum,
@@ -88,10 +88,10 @@ def test_sphere_measures_on_a_design():
 def test_cap_discrepancy_known_cases(rng):
     cells = CellMap(np.ones((90, 180)))
     centres, masses = cells.centres_and_masses()
-    north = fibonacci_sphere(2000)
+    north = fibonacci_lattice(2000)
     north[:, 2] = np.abs(north[:, 2])
     assert cap_discrepancy(north, centres, masses) == pytest.approx(0.5, abs=0.02)
-    spread, random = fibonacci_sphere(2000), rng.standard_normal((2000, 3))
+    spread, random = fibonacci_lattice(2000), rng.standard_normal((2000, 3))
     random /= np.linalg.norm(random, axis=1, keepdims=True)
     assert cap_discrepancy(spread, centres, masses) < 0.5 * cap_discrepancy(random, centres, masses)
     assert minimum_separation(spread) > 3 * minimum_separation(random)
@@ -137,7 +137,7 @@ def test_evaluate_cli_sphere_and_spectrum(tmp_path):
 
 
 def test_three_gaussians_positive():
-    assert np.all(three_gaussians(fibonacci_sphere(100)) > 0)
+    assert np.all(three_gaussians(fibonacci_lattice(100)) > 0)
 
 
 HEXAGONAL_COLUMNS, HEXAGONAL_ROWS = 15, 26
@@ -220,7 +220,7 @@ def test_density_at_reads_cells_functions_and_uniform():
         longitude = lon0 + (np.arange(4)[None, :] + 0.5) * 90 + 0 * latitude
         points = from_lon_lat(longitude.ravel(), latitude.ravel())
         np.testing.assert_array_equal(density_at(cells, points), values.ravel())
-    points = fibonacci_sphere(50)
+    points = fibonacci_lattice(50)
     np.testing.assert_array_equal(density_at(BUILTINS["uniform"], points), np.ones(50))
     np.testing.assert_array_equal(density_at(AnalyticDensity(three_gaussians), points), three_gaussians(points))
 
@@ -243,12 +243,12 @@ def test_sphere_clumps_icosahedron_fibonacci_and_a_duplicate(rng):
     for value in clumps["neighbour_distance_over_hexagonal"].values():
         assert value == pytest.approx(expected, rel=1e-12)
     assert clumps["median_neighbour_distance_radians"] == pytest.approx(np.arctan(2))
-    spread = sphere_clumps(fibonacci_sphere(2000), uniform)["neighbour_distance_over_hexagonal"]
+    spread = sphere_clumps(fibonacci_lattice(2000), uniform)["neighbour_distance_over_hexagonal"]
     assert 0.8 < spread["p01"] < spread["median"] < 1.05
     random = rng.standard_normal((2000, 3))
     random /= np.linalg.norm(random, axis=1, keepdims=True)
     assert sphere_clumps(random, uniform)["neighbour_distance_over_hexagonal"]["p01"] < 0.15
-    duplicated = np.concatenate([fibonacci_sphere(2000), fibonacci_sphere(2000)[:1]])
+    duplicated = np.concatenate([fibonacci_lattice(2000), fibonacci_lattice(2000)[:1]])
     assert sphere_clumps(duplicated, uniform)["neighbour_distance_over_hexagonal"]["min"] == 0
 
 
@@ -256,7 +256,7 @@ def test_sphere_clumps_scale_with_the_density_and_skip_empty_cells():
     # w = 1 on the northern hemisphere, 0 on the southern: only northern dots are judged. The northern half of
     # a Fibonacci set of 2M has the density M / (2 pi) that w asks for: the ratios of the whole uniform set.
     cells = CellMap(np.repeat([[1.0], [0.0]], 4, axis=1))
-    points = fibonacci_sphere(4000)
+    points = fibonacci_lattice(4000)
     clumps = sphere_clumps(points, cells)
     assert clumps["neighbour_points_judged"] == 2000
     north = points[points[:, 2] > 0]

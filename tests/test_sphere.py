@@ -275,10 +275,11 @@ def test_uniform_default_kernel_adds_a_design_term():
 
 def test_uniform_default_beats_the_fibonacci_lattice_at_low_degrees():
     """With the design term, the default run integrates low-degree harmonics better than the Fibonacci lattice."""
-    from stipple.measures.evaluate import discrepancy_energy, expected_iid_energy, fibonacci_sphere
+    from stipple.design import fibonacci_lattice
+    from stipple.measures.evaluate import discrepancy_energy, expected_iid_energy
 
     result = halftone_sphere(None, 400, iterations=400, tol=1e-12, threads=1, seed=3)
     judge = sphere_problem(None, 400, 20, kernel="distance", threads=1, epsilon=1e-12, near_field=False)
     ours = discrepancy_energy(judge, result.points) / expected_iid_energy(judge)
-    lattice = discrepancy_energy(judge, fibonacci_sphere(400)) / expected_iid_energy(judge)
+    lattice = discrepancy_energy(judge, fibonacci_lattice(400)) / expected_iid_energy(judge)
     assert ours < lattice / 5  # the distance kernel alone: lattice / 2.4

@@ -6,11 +6,13 @@ import click
 
 from ..errors import StippleError
 from .defaults import BACKENDS, INITS
-from .options import common_options, palette_options, resolve_input
+from .options import common_options, palette_options, resolve_input, without
 from .recipes import colour_recipe, run_pipeline
 
 
 @click.command()
+# The inks print on white paper in their own colours, from the image's colours as they are.
+@without("invert", "value_range", "gamma", "color", "background")
 @click.argument("image", required=False)
 @common_options
 @palette_options("cmyk")

@@ -14,6 +14,7 @@ from .options import (
     render_settings,
     run_options,
     session_options,
+    without,
 )
 from .supervise import finish, guarded_files, solve, write_outputs
 
@@ -56,6 +57,8 @@ def design_options(function):
 
 
 @click.command()
+# A design keeps its points' order, and its dots have no tone to keep (a uniform sphere).
+@without("order", "style")
 @design_options
 @click.pass_context
 def design(ctx, **options):

@@ -6,11 +6,13 @@ import click
 
 from ..errors import StippleError
 from .defaults import LINE_ITERATIONS
-from .options import common_options, is_default, resolve_input
+from .options import common_options, is_default, resolve_input, without
 from .supervise import finish, guarded_files, supervised, write_outputs
 
 
 @click.command()
+# The line is drawn black on white with one pen: the dot options and the dots' near field would do nothing.
+@without("near_field", "safeguard", "dot_radius", "order", "background", "color", "dot_style", "style")
 @click.argument("image", required=False)
 @common_options(iterations=LINE_ITERATIONS, settle=False)
 @click.option(

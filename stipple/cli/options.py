@@ -155,6 +155,17 @@ def common_options(function=None, *, iterations=2000, settle=True):
     return apply_options(function, [config_option()] + problem + runs + output_options() + session_options())
 
 
+def without(*names):
+    """Leave out the options ``names`` (parameter names) that the groups below it added: they would not act on
+    the command. Placed right under ``@click.command()``, so that it sees every option of the command."""
+
+    def decorate(function):
+        function.__click_params__ = [param for param in function.__click_params__ if param.name not in names]
+        return function
+
+    return decorate
+
+
 def look_options(function):
     """Options of the drawing (SVG and PNG) shared by every command that draws dots."""
     options = [

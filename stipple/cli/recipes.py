@@ -85,11 +85,11 @@ def check_colour_options(options):
             "--init must be stratified, density or uniform for colour separation (a start CSV is for one class); "
             "stratified starts from i.i.d. samples of each ink"
         )
-    if options["invert"] or options["value_range"] is not None:
+    if options.get("invert") or options.get("value_range") is not None:
         raise StippleError("--invert and --range are for gray images and maps, not colour separation")
-    if options["gamma"] != 1.0 or options.get("levels") is not None:
+    if options.get("gamma", 1.0) != 1.0 or options.get("levels") is not None:
         raise StippleError("--gamma and --levels are for gray images and maps, not colour separation")
-    if options["color"] is not None or options["background"] is not None:
+    if options.get("color") is not None or options.get("background") is not None:
         raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 
 

@@ -223,8 +223,12 @@ def supervised(options, launch, stop=None, announce=None):
     return result, interruption.signal
 
 
-def finish(result, stopped_by, options, started):
-    """Summary on stderr, and the exit code after a signal (130 / 143) with how to resume."""
+def finish(result, stopped_by, options, started, reached=None, energy=True):
+    """Summary on stderr, and the exit code after a signal (130 / 143) with how to resume.
+
+    ``reached`` says how far a stopped run got and what it wrote (default: its iteration; outputs written);
+    ``energy`` whether the summary gives the final energy.
+    """
     if stopped_by is not None:
         name = signal.Signals(stopped_by).name
         if options["checkpoint"]:
@@ -232,10 +236,12 @@ def finish(result, stopped_by, options, started):
             hint = f"resume with: {command}"
         else:
             hint = "no --checkpoint was given, so the run cannot be resumed"
-        click.echo(f"stipple: stopped by {name} at iteration {result.iterations}; outputs written; {hint}", err=True)
+        reached = f"at iteration {result.iterations}; outputs written" if reached is None else reached
+        click.echo(f"stipple: stopped by {name} {reached}; {hint}", err=True)
         sys.exit(128 + stopped_by)
     if not options["quiet"]:
-        click.echo(f"stipple: {result.message}; E={result.energy:.6e}; {time.perf_counter() - started:.1f} s", err=True)
+        summary = f"E={result.energy:.6e}; " if energy else ""
+        click.echo(f"stipple: {result.message}; {summary}{time.perf_counter() - started:.1f} s", err=True)
 
 
 def plot_order(centres, points, options, unit):

@@ -1,21 +1,22 @@
 """``stipple video``: a video or a sequence of frames stippled with the same dots, frame after frame."""
 
-import shlex
-import signal
 import sys
 import time
 
 import click
 
 from ..errors import StippleError
+from . import supervise
 from .defaults import BACKENDS, FRAME_ITERATIONS
-from .options import common_options, init_input, render_settings, resolve_input
+from .options import common_options, init_input, render_settings, resolve_input, without
 from .supervise import SIGNALS, Progress, guarded_files, parse_every
 
 DEFAULT_FPS = 24.0
 
 
 @click.command()
+# Dot i stays dot i in every frame, so nothing is reordered; the run reports frames, not settings.
+@without("order", "verbose")
 @click.argument("source", required=False)
 @common_options
 @click.option("--init", default="stratified", show_default=True, help="Frame 0's start (as for 'stipple torus').")
@@ -63,8 +64,6 @@ def video(ctx, source, **options):
     if source is None:
         raise click.UsageError("missing SOURCE (or 'input' in --config)")
     try:
-        if options["order"]:
-            raise StippleError("--order reorders the dots, and a video keeps dot i as dot i: leave it out")
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
@@ -172,15 +171,5 @@ def run_frames(frames, settings, outputs, options):
 
 def finish(result, stopped_by, options, started):
     """The summary on stderr, and after a signal the exit status (130 / 143) and how to resume."""
-    if stopped_by is not None:
-        if options["checkpoint"]:
-            command = shlex.join(["stipple"] + sys.argv[1:] + ([] if options["resume"] else ["--resume"]))
-            hint = f"resume with: {command}"
-        else:
-            hint = "no --checkpoint was given, so the run cannot be resumed"
-        name = signal.Signals(stopped_by).name
-        written = "outputs written" if result.frames else "no frame was finished, no output written"
-        click.echo(f"stipple: stopped by {name} after {result.frames} frames; {written}; {hint}", err=True)
-        sys.exit(128 + stopped_by)
-    if not options["quiet"]:
-        click.echo(f"stipple: {result.message}; {time.perf_counter() - started:.1f} s", err=True)
+    written = "outputs written" if result.frames else "no frame was finished, no output written"
+    supervise.finish(result, stopped_by, options, started, f"after {result.frames} frames; {written}", energy=False)

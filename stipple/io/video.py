@@ -17,10 +17,10 @@ import numpy as np
 from PIL import Image
 
 from ..errors import StippleError
+from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import image_density, load_array, load_density
+from .images import image_density, load_density
 
-VIDEO_EXTENSIONS = (".mp4", ".mov", ".m4v", ".mkv", ".webm", ".avi", ".gif")
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
 # Pillow's decompression-bomb limit, also for frames that PyAV decodes.
@@ -383,7 +383,8 @@ def load_video_checkpoint(path, settings):
     damaged, foreign, or for other settings. Nothing is unpickled and every member's size is checked first."""
     try:
         with zipfile.ZipFile(path) as archive:
-            metadata = _checkpoint_metadata(path, _member(path, archive, "metadata", MAX_METADATA_BYTES, "U"))
+            reader = MemberReader(path, archive, "not a video checkpoint", "damaged video checkpoint")
+            metadata = _checkpoint_metadata(path, reader.value("metadata", MAX_METADATA_BYTES, "U"))
             for key, value in settings.items():
                 if metadata["settings"].get(key) != value:
                     raise StippleError(
@@ -391,7 +392,7 @@ def load_video_checkpoint(path, settings):
                         f"{metadata['settings'].get(key)!r}, now {value!r}"
                     )
             frames, count = len(metadata["indices"]), settings["points"]
-            points = _member(path, archive, "points", 16 * frames * count, "f").astype(np.float64)
+            points = reader.value("points", 16 * frames * count, "f").astype(np.float64)
     except FileNotFoundError:
         raise StippleError(f"{path}: no checkpoint to resume") from None
     except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError, RuntimeError) as error:
@@ -399,21 +400,6 @@ def load_video_checkpoint(path, settings):
     if points.shape != (frames, count, 2) or not np.all((points >= 0) & (points <= 1)):
         raise StippleError(f"{path}: damaged video checkpoint (points of shape {points.shape} or outside [0, 1])")
     return points, metadata["indices"], metadata["fingerprints"]
-
-
-def _member(path, archive, name, limit, kinds):
-    try:
-        info = archive.getinfo(f"{name}.npy")
-    except KeyError:
-        raise StippleError(f"{path}: not a video checkpoint (no member {name})") from None
-    if info.file_size > limit + 4096:
-        raise StippleError(f"{path}: damaged video checkpoint ({name} holds {info.file_size} bytes)")
-    with archive.open(info) as stream:
-        data = stream.read(limit + 4097)
-    try:
-        return load_array(data, name, kinds=kinds)
-    except StippleError as error:
-        raise StippleError(f"{path}: damaged video checkpoint ({error})") from None
 
 
 def _checkpoint_metadata(path, text):

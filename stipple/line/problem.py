@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_integer
 from ..errors import StippleError
 from ..halftone import MAX_BANDWIDTH, Problem, check_count, check_positive, darkest_level
 from ..manifolds import Rectangle
@@ -116,13 +117,6 @@ def default_subdivisions(length, n_vertices):
     return int(np.clip(np.ceil(length / n_vertices / NODE_SPACING - 1e-9), 1, MAX_SUBDIVISIONS))
 
 
-def check_subdivisions(subdivisions):
-    """``subdivisions`` as an int from 1 to 64 (or a ``StippleError`` naming it)."""
-    if isinstance(subdivisions, bool) or not float(subdivisions).is_integer() or not 1 <= subdivisions <= 64:
-        raise StippleError(f"subdivisions must be a whole number from 1 to 64, not {subdivisions!r}")
-    return int(subdivisions)
-
-
 def darkest_tone(weights):
     """The density that the darkest ``DARKEST_MASS_SHARE`` of the ink reaches: the largest ``t`` with at least that
     share of ``sum w`` in pixels of ``w >= t`` (robust to a few outlying pixels, unlike ``max w``;
@@ -201,7 +195,9 @@ def line_problem(
     longest = max(padded.shape)
     padded_bandwidth = int(2 * np.ceil(bandwidth * longest / max(weights.shape) / 2))
     subdivisions = (
-        default_subdivisions(length, n_vertices) if subdivisions is None else check_subdivisions(subdivisions)
+        default_subdivisions(length, n_vertices)
+        if subdivisions is None
+        else check_integer("subdivisions", subdivisions, 1, 64)
     )
     nodes = n_vertices * subdivisions
     dots = torus_problem(

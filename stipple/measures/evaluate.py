@@ -21,6 +21,9 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from ..design import fibonacci_lattice
+from ..halftone import hexagonal_spacing
+
 BLURS = (1.0, 2.0, 4.0)
 # E|psi_l(X)|^2 as it enters sums whose weights depend on the degree only: 1 on the torus (|psi| = 1); on the
 # sphere sum_m mult |Y_nm|^2 = (2n+1)/(4 pi) everywhere (addition theorem), i.e. 1/(4 pi) per stored order.
@@ -170,10 +173,10 @@ def percentiles(ratios):
     return {"min": float(low), "p01": float(p01), "p05": float(p05), "median": float(median)}
 
 
-def hexagonal_spacing(density):
-    """Spacing ``sqrt(2 / (sqrt(3) rho))`` of a hexagonal packing with ``rho`` points per unit area."""
+def local_spacing(density):
+    """Spacing of a hexagonal packing with ``density`` points per unit area (``inf`` where it is 0)."""
     with np.errstate(divide="ignore"):
-        return np.sqrt(2 / (np.sqrt(3) * density))
+        return hexagonal_spacing(density, 1.0)
 
 
 def torus_neighbours(points, weights):
@@ -199,7 +202,7 @@ def torus_neighbours(points, weights):
     column = np.minimum((np.mod(points[:, 0], 1) * columns).astype(int), columns - 1)
     row = np.minimum((np.mod(points[:, 1], 1) * rows).astype(int), rows - 1)
     local = weights[row, column]
-    return distances[:, 1], hexagonal_spacing(len(points) * local / weights.sum()), local
+    return distances[:, 1], local_spacing(len(points) * local / weights.sum()), local
 
 
 def torus_neighbour_ratios(points, weights):
@@ -256,7 +259,7 @@ def sphere_clumps(points, density):
     chords, _ = cKDTree(points).query(points, k=2)
     distance = 2 * np.arcsin(np.minimum(chords[:, 1] / 2, 1.0))
     local = density_at(density, points)
-    spacing = hexagonal_spacing(len(points) * local / (4 * np.pi * density.mean))
+    spacing = local_spacing(len(points) * local / (4 * np.pi * density.mean))
     cells = density if hasattr(density, "values") else density.cell_map()
     judged = local > light_threshold(cells.values, cells.cell_areas)
     return {
@@ -286,14 +289,6 @@ def power_spectrum(problem, points, max_frequency=None):
     return {"frequency": frequencies, "power": means, "anisotropy_db": anisotropy}
 
 
-def fibonacci_sphere(count):
-    index = np.arange(count) + 0.5
-    z = 1 - 2 * index / count
-    phi = np.pi * (1 + np.sqrt(5)) * index
-    radius = np.sqrt(1 - z**2)
-    return np.stack([radius * np.cos(phi), radius * np.sin(phi), z], axis=1)
-
-
 def minimum_separation(points):
     """Smallest geodesic distance (radians) between two points."""
     distances, _ = cKDTree(points).query(points, k=2)
@@ -303,7 +298,7 @@ def minimum_separation(points):
 
 def cap_discrepancy(points, cell_centres, cell_masses, centres=500, radii=90):
     """``max |fraction of points in cap - fraction of mass in cap|`` over a grid of caps."""
-    directions = fibonacci_sphere(centres)
+    directions = fibonacci_lattice(centres)
     heights = np.cos(np.linspace(0, np.pi, radii + 2)[1:-1])
     worst = 0.0
     mass_fraction = cell_masses / cell_masses.sum()

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..checks import check_integer
 from ..errors import StippleError
 
 
@@ -51,15 +52,9 @@ def check_colours(colours, count):
 
 
 def check_options(passes, samples_per_dot, min_radius, max_radius, max_ratio):
-    passes = check_int(passes, "passes", 0, 50)
-    samples_per_dot = check_int(samples_per_dot, "samples_per_dot", 4, 1024)
+    passes = check_integer("passes", passes, 0, 50)
+    samples_per_dot = check_integer("samples_per_dot", samples_per_dot, 4, 1024)
     return passes, samples_per_dot, check_bounds(min_radius, max_radius, max_ratio)
-
-
-def check_int(value, name, low, high):
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not low <= value <= high:
-        raise StippleError(f"{name} must be an integer in [{low}, {high}], not {value!r}")
-    return int(value)
 
 
 def check_bounds(min_radius, max_radius, max_ratio):
