@@ -7,7 +7,7 @@ from ..errors import StippleError
 from ..io.commit import output_format
 from .defaults import INITS
 from .options import parse_levels, render_settings
-from .supervise import finish, guarded_files, solve, write_outputs
+from .supervise import announcer, finish, guarded_files, report_run, run_keywords, supervised, write_outputs
 
 
 def torus_recipe(options):
@@ -93,23 +93,23 @@ def check_colour_options(options):
         raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 
 
-def run_pipeline(pipeline, image, recipe, options, inputs, started, inspect=None):
-    """``pipeline(image, formats, recipe, solve=...)`` with the files guarded, the run supervised (progress,
-    checkpoint, signals), the pen-up travel reported, the outputs committed and the summary printed."""
-    stopped = []
-
-    def supervised_solve(problem, init):
-        result, stopped_by = solve(problem, options, init)
-        stopped.append(stopped_by)
-        return result
-
+def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers):
+    """``pipeline(image, formats, recipe, session=..., **observers)`` with the files guarded, the run supervised
+    (its progress, checkpoint and signal keywords are the ``session``), the settings announced (``--verbose``),
+    the pen-up travel reported, the outputs committed and the summary printed."""
     with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
         formats = [output_format(path) for path in options["outputs"]]
-        keywords = {} if inspect is None else {"inspect": inspect}
-        outputs = pipeline(image, formats, recipe, solve=supervised_solve, **keywords)
+        observers["announce"] = announcer(options)
+
+        def launch(keywords):
+            session = {**run_keywords(options), **keywords}
+            return pipeline(image, formats, recipe, session=session, **observers)
+
+        outputs, stopped_by = supervised(options, launch)
+        report_run(outputs.result, options)
         report_travel(outputs.travel, options, recipe)
         write_outputs(options["outputs"], outputs.files)
-    finish(outputs.result, stopped[0], options, started)
+    finish(outputs.result, stopped_by, options, started)
 
 
 def report_travel(travel, options, recipe):

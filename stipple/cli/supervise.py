@@ -149,13 +149,34 @@ def write_outputs(paths, files):
 def solve(problem, options, init, stop=None):
     """Run ``problem`` with the CLI's stopping, checkpoint, progress and signal options (and ``stop``, a callback
     that ends the run by returning True)."""
-    import numpy as np
-
     from ..halftone import run
 
-    verbose = options["verbose"] and not options["quiet"]
+    announce = announcer(options)
+    result, stopped_by = supervised(
+        options,
+        lambda keywords: run(problem, init=init, **run_keywords(options), **keywords),
+        stop,
+        None if announce is None else lambda: announce(problem),
+    )
+    report_run(result, options)
+    return result, stopped_by
 
-    def announce():
+
+def run_keywords(options):
+    """The keywords of ``halftone.run`` that the command's options set besides ``supervised``'s."""
+    return {
+        "safeguard": options["safeguard"],
+        "correct": options.get("correct", False),
+        "settle": options.get("settle"),
+    }
+
+
+def announcer(options):
+    """With ``--verbose``: ``announce(problem)``, one line of the problem's settings before it runs; else None."""
+    if not options["verbose"] or options["quiet"]:
+        return None
+
+    def announce(problem):
         fourier = problem.discrepancy.fourier
         transforms = getattr(fourier, "nufft", fourier)
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
@@ -165,27 +186,20 @@ def solve(problem, options, init, stop=None):
             err=True,
         )
 
-    result, stopped_by = supervised(
-        options,
-        lambda keywords: run(
-            problem,
-            init=init,
-            safeguard=options["safeguard"],
-            correct=options.get("correct", False),
-            settle=options.get("settle"),
-            **keywords,
-        ),
-        stop,
-        announce if verbose else None,
-    )
-    if verbose and len(result.energies) > 1:
+    return announce
+
+
+def report_run(result, options):
+    """With ``--verbose``: the time per iteration and the energy's course."""
+    if options["verbose"] and not options["quiet"] and len(result.energies) > 1:
+        import numpy as np
+
         rises = int(np.sum(np.diff(result.energies) > 0))
         click.echo(
             f"stipple: {result.seconds / max(result.iterations, 1) * 1000:.1f} ms per iteration, "
             f"energy {result.energies[0]:.4e} -> {result.energy:.4e} ({rises} rises)",
             err=True,
         )
-    return result, stopped_by
 
 
 def supervised(options, launch, stop=None, announce=None):
@@ -193,7 +207,7 @@ def supervised(options, launch, stop=None, announce=None):
     seed, callback and checkpoint arguments that ``halftone.run`` and ``draw_line`` share. The callback also ends
     the run when ``stop`` returns True, and ``announce()`` reports the settings between the checks of the
     checkpoint interval and of the seed. Returns the result and the signal that stopped it (or None)."""
-    from ..halftone import check_integer
+    from ..halftone import chain_callbacks, check_integer
 
     seconds, iterations = parse_every(options["checkpoint_every"])
     if announce is not None:
@@ -208,9 +222,7 @@ def supervised(options, launch, stop=None, announce=None):
                     "tol": options["tol"],
                     "iterations": options["iterations"],
                     "time_limit": options["time_limit"],
-                    "callback": lambda state: any(
-                        [progress(state), interruption.stop_requested(state), bool(stop and stop(state))]
-                    ),
+                    "callback": chain_callbacks(progress, interruption.stop_requested, stop),
                     "checkpoint": options["checkpoint"],
                     "checkpoint_seconds": seconds,
                     "checkpoint_iterations": iterations,

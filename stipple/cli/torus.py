@@ -59,9 +59,8 @@ def torus(ctx, image, **options):
 
         recipe = torus_recipe(options)
         inputs = [("image", image), init_input(options["init"])]
-        run_pipeline(
-            stipple_image, image, recipe, options, inputs, started, lambda weights: tone_hints(weights, options)
-        )
+        hints = {"inspect": lambda weights: tone_hints(weights, options)}
+        run_pipeline(stipple_image, image, recipe, options, inputs, started, **hints)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
 

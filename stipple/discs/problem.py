@@ -264,24 +264,8 @@ def optimise_discs(
     if isinstance(weights, (str, os.PathLike)):
         weights = load_density(weights)
     weights = check_weights(weights)
-    if isinstance(points, (int, np.integer)) and not isinstance(points, bool):
-        count = check_count(points)
-        points = stratified_sample(weights, np.random.default_rng(seed), count)
-    points = np.asarray(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1 or not np.all(np.isfinite(points)):
-        raise StippleError(f"points must be a finite (M, 2) array with M >= 1, not shape {points.shape}")
-    count = check_count(len(points))
-    largest = 0.25 * min(torus_scale(weights.shape))
-    radii = np.asarray(tone_radius(weights, count) if radii is None else radii, dtype=np.float64)
-    if radii.ndim == 0:
-        radii = np.full(count, float(radii))
-    if radii.shape != (count,):
-        raise StippleError(f"radii must be a number or an array of shape ({count},), not shape {radii.shape}")
-    bad = ~((radii > 0) & (radii <= largest))
-    if np.any(bad):
-        raise StippleError(
-            f"radii must be in (0, {largest:.4g}] (a quarter of the shorter side), not {radii[bad][0]!r}"
-        )
+    points, radii = start_discs(weights, points, radii, seed)
+    count = len(points)
     check_integer("iterations", iterations, 0, 10**9)
     if not isinstance(tol, (int, float)) or not tol > 0:
         raise StippleError(f"tol must be a positive number, not {tol!r}")
@@ -323,3 +307,27 @@ def optimise_discs(
         bandwidth=problem.bandwidth,
         rank=problem.objective.factors.rank,
     )
+
+
+def start_discs(weights, points, radii, seed):
+    """The starting positions ``(M, 2)`` and radii ``(M,)`` of ``optimise_discs``, checked (a count of points
+    starts from a stratified sample of ``weights`` drawn with ``seed``; radii default to the tone radius)."""
+    if isinstance(points, (int, np.integer)) and not isinstance(points, bool):
+        count = check_count(points)
+        points = stratified_sample(weights, np.random.default_rng(seed), count)
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1 or not np.all(np.isfinite(points)):
+        raise StippleError(f"points must be a finite (M, 2) array with M >= 1, not shape {points.shape}")
+    count = check_count(len(points))
+    largest = 0.25 * min(torus_scale(weights.shape))
+    radii = np.asarray(tone_radius(weights, count) if radii is None else radii, dtype=np.float64)
+    if radii.ndim == 0:
+        radii = np.full(count, float(radii))
+    if radii.shape != (count,):
+        raise StippleError(f"radii must be a number or an array of shape ({count},), not shape {radii.shape}")
+    bad = ~((radii > 0) & (radii <= largest))
+    if np.any(bad):
+        raise StippleError(
+            f"radii must be in (0, {largest:.4g}] (a quarter of the shorter side), not {radii[bad][0]!r}"
+        )
+    return points, radii

@@ -50,9 +50,9 @@ def ink_layers(layers, problem, result):
     return placed, sum(layer.density for layer in layers).mean()
 
 
-def stipple_colour(image, formats, recipe, *, solve=None):
+def stipple_colour(image, formats, recipe, *, session=None, announce=None):
     """Separate ``image`` (a path) into inks, optimise their dots jointly and draw them in every format of
-    ``formats``; ``solve(problem, init)``, if given, runs the problem (``stipple.pipelines.image.stipple_image``).
+    ``formats``; ``session`` and ``announce`` as for ``stipple.pipelines.image.stipple_image``.
 
     Returns
     -------
@@ -67,8 +67,9 @@ def stipple_colour(image, formats, recipe, *, solve=None):
         canvas = rgb.shape[1::-1]
         check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
     layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), **settings)
-    options = dict(recipe.solve)
-    result = run(problem, **options) if solve is None else solve(problem, options["init"])
+    if announce is not None:
+        announce(problem)
+    result = run(problem, **{**recipe.solve, **(session or {})})
     placed, ink = ink_layers(layers, problem, result)
     shape, travel = rgb.shape[:2], []
     if recipe.order:

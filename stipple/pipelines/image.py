@@ -43,7 +43,7 @@ class TorusRecipe:
 @dataclass
 class ImageOutputs:
     """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
-    optimiser's ``HalftoneResult`` (or what the caller's ``solve`` returned); ``travel`` the pen-up travel
+    optimiser's ``HalftoneResult``; ``travel`` the pen-up travel
     before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it)."""
 
     files: dict
@@ -51,7 +51,7 @@ class ImageOutputs:
     travel: list = field(default_factory=list)
 
 
-def stipple_image(image, formats, recipe, *, solve=None, inspect=None):
+def stipple_image(image, formats, recipe, *, session=None, inspect=None, announce=None):
     """Stipple ``image`` (a path) as ``stipple torus`` does and draw it in every format of ``formats``.
 
     Parameters
@@ -61,11 +61,12 @@ def stipple_image(image, formats, recipe, *, solve=None, inspect=None):
     formats : iterable of str
         Output formats with their dot: ".csv", ".png", ".svg".
     recipe : TorusRecipe
-    solve : callable, optional
-        ``solve(problem, init)`` runs the problem and returns its result (the command line's supervised run,
-        with its checkpoint, progress and signals); default ``stipple.halftone.run`` with ``recipe.solve``.
-    inspect : callable, optional
-        ``inspect(weights)`` is shown the density once it is loaded (the command line's hints).
+    session : dict, optional
+        Keywords of ``stipple.halftone.run`` that override ``recipe.solve``: the command line's progress and
+        signal ``callback``, checkpoint and resume.
+    inspect, announce : callable, optional
+        Observers: ``inspect(weights)`` is shown the density once it is loaded, ``announce(problem)`` the problem
+        before it runs (the command line's hints and ``--verbose``).
 
     Returns
     -------
@@ -76,9 +77,11 @@ def stipple_image(image, formats, recipe, *, solve=None, inspect=None):
     if inspect is not None:
         inspect(weights)
     problem = image_problem(weights, formats, recipe)
-    options = dict(recipe.solve)
+    options = {**recipe.solve, **(session or {})}
     init = read_torus_init(options.pop("init", "stratified"), weights.shape)
-    result = run(problem, init=init, **options) if solve is None else solve(problem, init)
+    if announce is not None:
+        announce(problem)
+    result = run(problem, init=init, **options)
     points, travel = result.points, []
     if recipe.order:
         width = recipe.draw.get("width", (200.0, "mm"))
