@@ -9,7 +9,8 @@ from click.testing import CliRunner
 from PIL import Image
 
 from stipple.cli import main
-from stipple.render.pen import greedy_order, path_length, plotter_order, two_opt
+from stipple.render.pen import greedy_order, path_length, plotter_order
+from stipple.tours import two_opt
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -82,7 +83,7 @@ def test_order_shortens_the_pen_path(torus_csv, tmp_path):
 def test_two_opt_improves_greedy_and_keeps_every_dot(rng):
     centres = rng.random((600, 2))
     greedy = greedy_order(centres)
-    improved = two_opt(centres, greedy)
+    improved = two_opt(centres, greedy, closed=False)
     assert sorted(improved) == list(range(600))
     assert path_length(centres[improved]) < path_length(centres[greedy])
     order, before, after = plotter_order(centres)
@@ -91,7 +92,7 @@ def test_two_opt_improves_greedy_and_keeps_every_dot(rng):
 
 def test_two_opt_untangles_a_crossing():
     square = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0], [0.0, 2.0]])
-    order = two_opt(square, np.arange(5))
+    order = two_opt(square, np.arange(5), closed=False)
     assert path_length(square[order]) < path_length(square)
 
 

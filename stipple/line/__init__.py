@@ -3,7 +3,7 @@
 Modules: ``problem`` (the curve's problem, ``LineProblem``, and its defaults: length, bandwidth, subdivisions),
 ``draw`` (``draw_line``: the phases that drive the speed penalty up until every segment has the same length),
 ``terms`` (the curve's objectives: the speed penalty and the quadrature nodes along the segments), ``start`` (the
-first loop: a tour of density samples, resampled), ``tours`` (2-opt of a closed tour). ``stipple line`` and the
+first loop: a tour of density samples shortened by ``stipple.tours.two_opt``, resampled). ``stipple line`` and the
 vpype plugin call ``draw_line`` and ``line_points``.
 """
 

@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 from scipy.spatial import Delaunay
 
 from ..torus import halftone_torus
-from .tours import two_opt
+from ..tours import two_opt
 
 MIN_CURVE_VERTICES = 4
 
