@@ -27,6 +27,8 @@ import numpy as np
 from PIL import Image, ImageDraw
 from scipy import ndimage
 
+from stipple.measures.evaluate import local_spacing
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path("/work/shared/data")
 SAMPLES = ROOT / "samples"
@@ -172,10 +174,6 @@ def evaluate(domain, input_path, points_path, count):
     return evaluate_sphere(problem, points, density), points, density.values
 
 
-def hexagonal_spacing(density_per_area):
-    return np.sqrt(2 / (np.sqrt(3) * density_per_area))
-
-
 def draw_discs(xy, radius, size):
     """Black discs of ``radius`` (crop pixels) at ``xy`` (crop pixels) on a white ``size × size`` image."""
     image = Image.new("L", (size, size), 255)
@@ -198,7 +196,7 @@ def torus_crop(unit, weights):
     scale = CROP_PIXELS / side
     # Local density in dots per pixel² at the crop centre: M w / sum(w).
     peak = len(unit) * smooth[row, column] / weights.sum()
-    radius = DISC_FRACTION * hexagonal_spacing(peak) * scale
+    radius = DISC_FRACTION * local_spacing(peak) * scale
     return draw_discs((offset[inside] + side / 2) * scale, radius, CROP_PIXELS)
 
 
@@ -217,7 +215,7 @@ def sphere_crop(points, values, half_width=0.25):
     edges = np.cos(np.linspace(0, np.pi, rows + 1))
     mass = np.sum(values * (edges[:-1] - edges[1:])[:, None]) * 2 * np.pi / values.shape[1]
     peak = len(points) * smooth[row, column] / mass
-    radius = DISC_FRACTION * hexagonal_spacing(peak) * scale
+    radius = DISC_FRACTION * local_spacing(peak) * scale
     return draw_discs((xy[inside] + half_width) * scale, radius, CROP_PIXELS)
 
 

@@ -28,6 +28,7 @@ LAYERS = {
     "stipple.checks": "utilities",
     "stipple.allocator": "utilities",
     "stipple.parallel": "utilities",
+    "stipple.lazy": "utilities",
 }
 ORDER = ("interface", "pipelines", "method", "io", "utilities")
 # Modules allowed to import click or tqdm: the command line, the vpype plugin and ``python -m stipple``.

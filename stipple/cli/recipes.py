@@ -14,7 +14,6 @@ def torus_recipe(options):
     """What ``stipple torus`` does to an image with these options, as a ``stipple.pipelines.image.TorusRecipe``
     (the run's stopping, checkpoint and progress options are ``solve``'s)."""
     from ..pipelines.image import TorusRecipe
-    from ..torus import DEFAULT_EPSILON
 
     return TorusRecipe(
         load={
@@ -23,15 +22,7 @@ def torus_recipe(options):
             "value_range": options["value_range"],
             "levels": parse_levels(options["levels"]),
         },
-        problem={
-            "n_points": options["n_points"],
-            "bandwidth": options["bandwidth"],
-            "backend": options["backend"],
-            "threads": options["threads"],
-            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
-            "hessian": options["hessian"],
-            "near_field": options["near_field"] is not False,
-        },
+        problem=problem_settings(options),
         solve={
             "init": options["init"],
             "seed": options["seed"],
@@ -48,12 +39,26 @@ def torus_recipe(options):
     )
 
 
+def problem_settings(options):
+    """The torus problem's settings of the options (``torus_problem``'s and ``colour_problem``'s keywords)."""
+    from ..torus import DEFAULT_EPSILON
+
+    return {
+        "n_points": options["n_points"],
+        "bandwidth": options["bandwidth"],
+        "backend": options["backend"],
+        "threads": options["threads"],
+        "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
+        "hessian": options["hessian"],
+        "near_field": options["near_field"] is not False,
+    }
+
+
 def colour_recipe(options):
     """What ``stipple colour`` does to an image with these options, as a ``stipple.pipelines.colour.ColourRecipe``:
     options of the shared set that have no meaning for colour separation are refused, not ignored."""
     from ..colour import parse_palette
     from ..pipelines.colour import ColourRecipe
-    from ..torus import DEFAULT_EPSILON
 
     check_colour_options(options)
     palette = parse_palette(options["palette"])
@@ -61,16 +66,10 @@ def colour_recipe(options):
     draw.pop("color")
     return ColourRecipe(
         problem={
-            "n_points": options["n_points"],
-            "bandwidth": options["bandwidth"],
+            **problem_settings(options),
             "separation": palette,
             "black": options["black"],
             "union_weight": options["union_weight"],
-            "backend": options["backend"],
-            "threads": options["threads"],
-            "epsilon": DEFAULT_EPSILON if options["epsilon"] is None else options["epsilon"],
-            "hessian": options["hessian"],
-            "near_field": options["near_field"] is not False,
         },
         solve={"init": options["init"]},
         draw=draw,
