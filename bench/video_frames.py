@@ -1,0 +1,130 @@
+"""Stippled video frame by frame against cold runs (issue 35): the low frequencies of every frame, and still dots.
+
+    python bench/video_frames.py [-M 2000] [--frames 16] [--threads 2] [--clip disc --clip pan ...] [--json OUT]
+
+Clips (``bench/clips.py``, 208 x 128 px): ``disc``, the issue's dark disc moving along a sine over a horizontal
+gradient; ``pan``, a photo sliding under a still caption strip; ``fade``, a cross-fade between two photos above
+the strip; ``cut``, a moving disc over a photo that cuts to another one half-way. Per frame, ``stipple_video``'s
+dots (``warm``) against a cold run of the frame on its own (``halftone_torus``, seed 0):
+
+* ``E_N`` at N = 128 (the plain bandlimited error, no near field; low frequencies, where a viewer looks);
+* PSNR of the exactly blurred dots against the blurred density at sigma 1, 2 and 4 px (``exact_blurs``);
+* the worst local error at sigma 4 px: ``max |blurred dots - blurred density|`` (darkness units);
+* the moves of the still dots (in pixels farther than two spacings from every pixel that changes in the clip)
+  from the frame before, over the local hexagonal spacing: median and 95th percentile;
+* seconds per frame.
+
+The thresholds of issue 35: every frame E_N(128) <= 1.3 x cold, PSNR sigma 4 within 3 dB, worst local error
+<= 1.3 x cold; still dots' median move <= 0.05 and 95th percentile <= 0.2 spacings; warm <= 0.3 x cold seconds.
+"""
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from clips import cut_clip, disc_clip, fade_clip, pan_clip, still_mask  # noqa: E402
+from video import densities, pair_moves, spacing  # noqa: E402
+
+from stipple.evaluate import discrepancy_energy, exact_blurs, psnr  # noqa: E402
+from stipple.torus import default_bandwidth, halftone_torus, torus_problem  # noqa: E402
+from stipple.video import VideoSettings, stipple_video  # noqa: E402
+
+CLIPS = {"disc": disc_clip, "pan": pan_clip, "fade": fade_clip, "cut": cut_clip}
+LOW_BANDWIDTH = 128
+SIGMAS = (1.0, 2.0, 4.0)
+
+
+def frame_measures(weights, points, count, threads):
+    """E_N at ``LOW_BANDWIDTH``, PSNR per sigma and the worst local error at the largest sigma."""
+    problem = torus_problem(weights, count, LOW_BANDWIDTH, threads=threads, near_field=False)
+    measures = {"energy": discrepancy_energy(problem, points), "psnr": []}
+    for sigma in SIGMAS:
+        reference, test = exact_blurs(weights, points, sigma, threads)
+        measures["psnr"].append(psnr(reference, test))
+    measures["worst"] = float(np.abs(reference - test).max())
+    return measures
+
+
+def cold_runs(weights, count, bandwidth, threads):
+    """``(points, seconds)`` of every frame stippled on its own."""
+    runs = []
+    for w in weights:
+        started = time.perf_counter()
+        points = halftone_torus(w, count, bandwidth, threads=threads, seed=0).points
+        runs.append((points, time.perf_counter() - started))
+    return runs
+
+
+def warm_run(weights, count, bandwidth, threads, **options):
+    """``(points, seconds)`` of every frame of ``stipple_video``."""
+    frames = []
+    settings = VideoSettings(n_points=count, bandwidth=bandwidth, threads=threads, **options)
+    stipple_video(enumerate(weights), settings, on_frame=lambda f: frames.append((f.points, f.seconds)))
+    return frames
+
+
+def clip_case(name, clip, count, threads, cold=None, **options):
+    """Per-frame measures of the warm run against the cold runs, and the worst frame's ratios."""
+    weights = densities(clip)
+    rows, columns = weights[0].shape
+    scale = np.array([columns, rows])
+    bandwidth = default_bandwidth(count, weights[0])
+    cold = cold or cold_runs(weights, count, bandwidth, threads)
+    warm = warm_run(weights, count, bandwidth, threads, **options)
+    margin = 2 * float(np.median(spacing(weights[0], cold[0][0] * scale, count)))
+    mask = still_mask([np.round(255 * w) for w in weights], margin)
+    rows_out = []
+    for k, w in enumerate(weights):
+        hot, cool = frame_measures(w, warm[k][0], count, threads), frame_measures(w, cold[k][0], count, threads)
+        row = {
+            "frame": k,
+            "energy_over_cold": hot["energy"] / cool["energy"],
+            "psnr": hot["psnr"],
+            "cold_psnr": cool["psnr"],
+            "worst": hot["worst"],
+            "cold_worst": cool["worst"],
+            "worst_over_cold": hot["worst"] / cool["worst"],
+        }
+        if k and mask.any():
+            moves = pair_moves(warm[k - 1][0] * scale, warm[k][0] * scale, w, mask, identity=True)
+            row["still_move"] = [float(np.median(moves)), float(np.percentile(moves, 95))] if moves.size else None
+        rows_out.append(row)
+    moved = [r["still_move"] for r in rows_out if r.get("still_move")]
+    worst = {
+        "energy_over_cold": max(r["energy_over_cold"] for r in rows_out),
+        "psnr4_below_cold": max(r["cold_psnr"][2] - r["psnr"][2] for r in rows_out),
+        "worst_over_cold": max(r["worst_over_cold"] for r in rows_out),
+        "still_move_median": max((m[0] for m in moved), default=None),
+        "still_move_p95": max((m[1] for m in moved), default=None),
+        "warm_over_cold_seconds": statistics.median(s for _, s in warm[1:]) / statistics.median(s for _, s in cold),
+    }
+    case = {"clip": name, "M": count, "N": bandwidth, "size": [columns, rows], "frames": len(weights)}
+    return {**case, "still_fraction": float(mask.mean()), "worst": worst, "per_frame": rows_out}, cold
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("-M", "--count", type=int, default=2000)
+    parser.add_argument("--frames", type=int, default=16)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--clip", action="append", choices=sorted(CLIPS), help="default: all four")
+    parser.add_argument("--json", help="write the cases as JSON here")
+    args = parser.parse_args()
+    cases = []
+    for name in args.clip or list(CLIPS):
+        case, _ = clip_case(name, CLIPS[name](args.frames), args.count, args.threads)
+        cases.append(case)
+        print(json.dumps({key: value for key, value in case.items() if key != "per_frame"}), flush=True)
+    if args.json:
+        with open(args.json, "w") as handle:
+            json.dump(cases, handle, indent=1)
+
+
+if __name__ == "__main__":
+    main()
