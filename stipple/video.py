@@ -20,11 +20,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.ndimage import distance_transform_edt, gaussian_filter
 
+from .colour import palette_label
 from .errors import StippleError
 from .halftone import check_integer, correct_low_frequencies, run
 from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
 from .manifolds import PinnedTorus
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
+from .video_inks import Inks
 
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
 # left 4-12 % and the dots' moves in still regions were the same (docs/video.md).
@@ -53,6 +55,8 @@ CUT_MARGIN = 1.0
 class VideoSettings:
     """What defines a stippled video's optimisation (the keywords of ``torus_problem`` and ``halftone.run``).
 
+    ``palette`` (a separation or pens, ``stipple.colour.separate``; None: gray frames), ``black`` and
+    ``union_weight`` make a colour video: frames are RGB, one class of dots per ink (``stipple.colour``).
     ``init`` and ``iterations`` are frame 0's (its cold run) and a scene cut's; ``frame_iterations`` caps every
     other frame's warm-started run, which moves the dots within ``free_margin`` spacings of a change in darkness
     above ``change`` (``free_dots``). ``correct``: the low-frequency correction, of frame 0 and of every warm frame
@@ -78,13 +82,18 @@ class VideoSettings:
     correct: bool = True
     safeguard: bool = False
     beta: str = "hestenes-stiefel"
+    palette: object = None
+    black: float = 1.0
+    union_weight: float = 1.0
 
 
 @dataclass
 class Frame:
     """One finished frame: its number in the source, its dots (unit coordinates, row i is dot i), the density
     ``w`` they were placed from (what a tone-true drawing reproduces), and how it was made (``replayed``: read back
-    from a checkpoint, not optimised)."""
+    from a checkpoint, not optimised). A colour video's frame also has its ``inks``, ``(name, colour, slice)``
+    with ``points[slice]`` the ink's dots (the same in every frame), and its RGB ``picture``; ``density`` is then
+    the inks' densities, ``(K, H, W)``."""
 
     index: int
     points: object
@@ -94,6 +103,8 @@ class Frame:
     iterations: int = 0
     energy: float = 0.0
     seconds: float = 0.0
+    inks: tuple = ()
+    picture: object = None
 
 
 @dataclass
@@ -160,20 +171,26 @@ def stipple_video(
     previous, bandwidth, timings, status, position = None, settings.bandwidth, [], "finished", -1
     reference, free = (None, None) if key is None else (key[1], None)
     previous, before = (None, None) if key is None else key
-    for position, (index, weights) in enumerate(frames):
-        bandwidth = bandwidth or default_bandwidth(settings.n_points, weights)
+    inks = None if settings.palette is None else Inks(settings, None if key is None else key[1])
+    for position, (index, picture) in enumerate(frames):
+        weights = picture if inks is None else inks.densities(picture)
+        bandwidth = bandwidth or default_bandwidth(
+            settings.n_points, weights.sum(axis=0) if inks is not None else weights
+        )
         change = frame_change(before, weights, settings.n_points)
         if previous is not None:
             margin = min(settings.free_margin, CUT_MARGIN) if change > CUT else settings.free_margin
             free, reference = free_dots(previous, reference, weights, replace(settings, free_margin=margin))
         frame = keeper.replay(position, index, weights)
         if frame is None:
-            frame = _optimise(weights, index, previous, free, bandwidth, settings, stop, change)
+            frame = _optimise(weights, index, previous, free, bandwidth, settings, stop, change, inks)
             if frame is None:
                 status = "stopped"
                 break
             timings.append(frame.seconds)
             keeper.add(frame, weights)
+        if inks is not None:
+            frame = replace(frame, inks=inks.layers, picture=picture)
         if on_frame is not None:
             on_frame(frame)
         previous, before = frame.points, weights
@@ -202,16 +219,15 @@ def free_dots(points, reference, weights, settings):
         Dots within ``free_margin`` mean dot spacings (distances wrap around, as on the torus) of a pixel whose
         darkness differs from ``reference`` by more than ``change``, both as it is and blurred at one spacing
         (the blur keeps 8-bit and compression noise out; the pixel's own change keeps a large change elsewhere
-        from spilling into a still part through the blur).
+        from spilling into a still part through the blur). A colour video's ``(K, H, W)`` inks: any ink's.
     reference : numpy.ndarray
         ``weights`` within that margin, ``reference`` elsewhere.
     """
-    rows, columns = weights.shape
+    rows, columns = weights.shape[-2:]
     spacing = np.sqrt(2 * rows * columns / (np.sqrt(3) * settings.n_points))
     difference = weights - reference
-    changed = (np.abs(gaussian_filter(difference, spacing, mode="wrap")) > settings.change) & (
-        np.abs(difference) > settings.change
-    )
+    changed = (np.abs(_blur(difference, spacing)) > settings.change) & (np.abs(difference) > settings.change)
+    changed = changed.any(axis=0) if changed.ndim == 3 else changed
     pad = int(np.ceil(settings.free_margin * spacing)) + 1
     pr, pc = min(pad, rows), min(pad, columns)
     distance = distance_transform_edt(np.pad(~changed, ((pr, pr), (pc, pc)), mode="wrap"))[
@@ -230,24 +246,21 @@ def frame_change(before, weights, n_points):
         return float("inf")
     if np.array_equal(before, weights):
         return 0.0
-    rows, columns = weights.shape
+    rows, columns = weights.shape[-2:]
     spacing = np.sqrt(2 * rows * columns / (np.sqrt(3) * n_points))
-    return float(np.abs(gaussian_filter(weights - before, spacing, mode="wrap")).mean())
+    blurred = np.abs(_blur(weights - before, spacing))
+    return float((blurred.sum(axis=0) if blurred.ndim == 3 else blurred).mean())
 
 
-def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=float("inf")):
+def _blur(values, sigma):
+    """A periodic Gaussian blur of ``sigma`` pixels of an ``(H, W)`` array or of each of a ``(K, H, W)`` stack."""
+    return gaussian_filter(values, (0,) * (np.ndim(values) - 2) + (sigma, sigma), mode="wrap")
+
+
+def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=float("inf"), inks=None):
     """Frame ``index``'s dots: a cold run without ``previous`` points, else warm-started from them (``_warm``);
     None if ``stop`` stopped it."""
-    problem = torus_problem(
-        weights,
-        settings.n_points,
-        bandwidth,
-        backend=settings.backend,
-        threads=settings.threads,
-        epsilon=settings.epsilon,
-        hessian=settings.hessian,
-        near_field=settings.near_field,
-    )
+    problem = _problem(weights, bandwidth, settings, inks)
     warm = previous is not None
     started = time.perf_counter()
     if warm:
@@ -291,6 +304,22 @@ def _warm(problem, previous, free, settings, stop, change):
     return replace(result, iterations=result.iterations + sum(level.iterations for level in result.corrections))
 
 
+def _problem(weights, bandwidth, settings, inks):
+    """A frame's problem: ``torus_problem`` of the darkness, or a colour video's ``Inks.problem``."""
+    if inks is not None:
+        return inks.problem(weights, bandwidth)
+    return torus_problem(
+        weights,
+        settings.n_points,
+        bandwidth,
+        backend=settings.backend,
+        threads=settings.threads,
+        epsilon=settings.epsilon,
+        hessian=settings.hessian,
+        near_field=settings.near_field,
+    )
+
+
 def _run_options(settings, stop):
     """``halftone.run``'s keywords that every frame shares."""
     return {
@@ -318,6 +347,10 @@ def _defining(settings, identity):
         "change": settings.change,
         "free_margin": settings.free_margin,
     }
+    if settings.palette is not None:
+        defining.update(
+            palette=palette_label(settings.palette), black=settings.black, union_weight=settings.union_weight
+        )
     return {**defining, **(identity or {})}
 
 

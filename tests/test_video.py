@@ -241,3 +241,90 @@ def test_a_file_without_a_decodable_video_stream_gets_one_line(tmp_path):
         result = video(path, "-M", COUNT, "-o", tmp_path / "d.csv")
         assert result.exit_code == 1 and message in result.output and len(result.output.splitlines()) == 1
     assert not (tmp_path / "d.csv").exists()
+
+
+def colour_disc(frames=4, width=64, height=48):
+    """RGB frames in [0, 1]: a still band from cyan to yellow above a red disc moving right over light blue."""
+    y, x = np.mgrid[0:height, 0:width] + 0.5
+    t = x / width
+    still = np.stack([t, np.full_like(t, 0.8), 1 - t], axis=-1)
+    clip = []
+    for k in range(frames):
+        cover = np.clip(6.5 - np.hypot(x - width * (0.25 + 0.1 * k), y - 0.7 * height), 0, 1)[..., None]
+        moving = np.array([0.7, 0.85, 1.0]) * (1 - cover) + np.array([0.9, 0.1, 0.1]) * cover
+        clip.append(np.where((y < 0.4 * height)[..., None], still, moving))
+    return clip
+
+
+def test_a_colour_video_keeps_each_dot_in_its_ink_and_each_ink_as_good_as_a_cold_run():
+    from stipple.colour import halftone_colour, separate
+
+    clip = colour_disc()
+    frames = []
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1, palette="cmy")
+    stipple_video(enumerate(clip), settings, on_frame=frames.append)
+    assert [name for name, _, _ in frames[0].inks] == ["cyan", "magenta", "yellow"]
+    assert all(frame.inks == frames[0].inks for frame in frames)  # dot i is the same ink's in every frame
+    rows, columns = clip[0].shape[:2]
+    spacing = np.sqrt(2 / (np.sqrt(3) * COUNT / (rows * columns)))
+    for before, after in zip(frames, frames[1:], strict=False):
+        still = before.points[:, 1] * rows < 0.3 * rows  # the still band, away from the disc
+        moves = np.hypot(*((after.points - before.points)[still] * [columns, rows]).T) / spacing
+        assert np.median(moves) < 0.05 and np.percentile(moves, 95) < 0.2
+    for frame, rgb in zip(frames, clip, strict=True):
+        layers, problem, cold = halftone_colour(
+            rgb, COUNT, BANDWIDTH, separation="cmy", threads=1, init="density", settle=1.5e-3
+        )
+        inks = {layer.name: layer.density for layer in separate(rgb, "cmy")}
+        for (name, _, part), cold_part in zip(frame.inks, problem.slices, strict=True):
+            warm_error = np.subtract(*exact_blurs(inks[name], frame.points[part], 4.0))
+            cold_error = np.subtract(*exact_blurs(inks[name], cold.points[cold_part], 4.0))
+            assert np.sqrt(np.mean(warm_error**2)) < 1.5 * np.sqrt(np.mean(cold_error**2)), name
+
+
+def test_fixed_class_counts_give_each_ink_its_share_of_the_union():
+    from stipple.multiclass import multiclass_problem
+    from stipple.torus import axis_bandwidths, image_coefficients
+
+    y, x = np.mgrid[0:32, 0:48] / 48
+    densities = [0.2 + 0.5 * x, 0.6 - 0.3 * y]
+    counts = [100, 200]  # not in proportion to the masses
+    problem = multiclass_problem(densities, 300, 16, counts=counts, threads=1, near_field=False)
+    assert [part.n_points for part in problem.classes] == counts
+    masses = np.array([d.sum() for d in densities])
+    shares = np.array(counts) / 300 * masses.sum() / masses
+    bandwidths = axis_bandwidths(16, densities[0].shape)
+    expected = sum(s * image_coefficients(d, bandwidths) for s, d in zip(shares, densities, strict=True))
+    assert np.allclose(problem.discrepancy.target, expected, rtol=1e-12, atol=1e-15)
+    assert np.isclose(problem.discrepancy.weight * 300, masses.sum() / densities[0].size)  # the inks' mass
+    with pytest.raises(StippleError, match="class counts"):
+        multiclass_problem(densities, 300, 16, counts=[100, 100], threads=1)
+
+
+def test_colour_video_command_writes_each_dots_ink_and_refuses_gray_options(tmp_path):
+    source = tmp_path / "in"
+    source.mkdir()
+    for k, rgb in enumerate(colour_disc(3)):
+        Image.fromarray(np.round(rgb * 255).astype(np.uint8)).save(source / f"{k}.png")
+    result = video(source, "-M", COUNT, "-N", BANDWIDTH, "--palette", "cmy", "-o", tmp_path / "d.csv")
+    assert result.exit_code == 0, result.output
+    lines = (tmp_path / "d.csv").read_text().splitlines()
+    assert lines[0] == "frame,x,y,layer" and len(lines) == 1 + 3 * COUNT
+    inks = [[line.split(",")[3] for line in lines[1:] if line.startswith(f"{k},")] for k in range(3)]
+    assert inks[0] == inks[1] == inks[2] and set(inks[0]) == {"cyan", "magenta", "yellow"}
+    refused = video(source, "-M", COUNT, "--palette", "cmy", "--levels", "auto", "-o", tmp_path / "e.csv")
+    assert refused.exit_code != 0 and "--levels" in refused.output and not (tmp_path / "e.csv").exists()
+
+
+def test_levels_stretch_every_frame_alike(tmp_path):
+    from stipple.io.images import load_density
+    from stipple.io.video import open_frames
+
+    source = frames_folder(tmp_path / "in", moving_disc(3))
+    frames = open_frames(source)
+    fixed = dict(frames.densities(levels=(0.2, 0.8)))
+    assert np.array_equal(fixed[2], load_density(source / "2.png", levels=(0.2, 0.8)))
+    first = load_density(source / "0.png")
+    black, white = np.percentile(1 - first, [0.5, 99.5])
+    auto = dict(frames.densities(levels="auto"))
+    assert np.array_equal(auto[2], load_density(source / "2.png", levels=(black, white)))

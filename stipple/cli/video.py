@@ -6,6 +6,7 @@ import sys
 import time
 
 import click
+import numpy as np
 
 from ..errors import StippleError
 from ..halftone import check_integer
@@ -14,7 +15,7 @@ from ..io.points import read_torus_init
 from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
 from ..transforms import BACKENDS
 from ..video import FRAME_ITERATIONS, VideoSettings, stipple_video
-from .options import common_options, init_input, render_settings, resolve_input
+from .options import common_options, init_input, palette_options, parse_levels, render_settings, resolve_input
 from .supervise import SIGNALS, Progress, guarded_files, parse_every
 
 DEFAULT_FPS = 24.0
@@ -54,11 +55,19 @@ DEFAULT_FPS = 24.0
 @click.option("--start", type=click.IntRange(min=0), default=0, show_default=True, help="First frame (from 0).")
 @click.option("--stop", type=click.IntRange(min=1), default=None, help="Stop before this frame (default: the end).")
 @click.option("--step", type=click.IntRange(min=1), default=1, show_default=True, help="Take every STEP-th frame.")
+@click.option(
+    "--levels",
+    default=None,
+    help="Gray values BLACK,WHITE in [0, 1] stretched to black and white before stippling, or 'auto' (the first "
+    "frame's 0.5th and 99.5th percentiles, kept for every frame).",
+)
+@palette_options(None)
 @click.pass_context
 def video(ctx, source, **options):
     """Stipple SOURCE, a video (MP4, MOV, WebM, GIF, ...; needs stipple[video]) or a folder or glob of frame
     images, with the same dots in every frame: -o out.mp4, -o dots.csv (frame,x,y; row i of every frame is dot
-    i), -o 'frames/%04d.png' (one PNG or SVG per frame)."""
+    i), -o 'frames/%04d.png' (one PNG or SVG per frame). With --palette, one layer of dots per ink, each dot
+    keeping its ink (CSV frame,x,y,layer)."""
     from ..io.writers import torus_output
 
     started = time.perf_counter()
@@ -68,6 +77,10 @@ def video(ctx, source, **options):
     try:
         if options["order"]:
             raise StippleError("--order reorders the dots, and a video keeps dot i as dot i: leave it out")
+        if options["palette"] is not None:
+            from .colour import check_colour_options
+
+            check_colour_options(options)
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
@@ -83,7 +96,9 @@ def video(ctx, source, **options):
             def draw(points, density, fmt):
                 return torus_output(points, frames.shape, fmt, darkness=density, **settings)
 
-            with VideoOutputs(plan, frames.shape, draw, fps) as outputs:
+            if options["palette"] is not None:
+                draw = colour_drawing(frames.shape, settings)
+            with VideoOutputs(plan, frames.shape, draw, fps, layered=options["palette"] is not None) as outputs:
                 result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
                 if result.frames:
                     outputs.commit()
@@ -92,9 +107,29 @@ def video(ctx, source, **options):
     finish(result, stopped_by, options, started)
 
 
+def colour_drawing(shape, settings):
+    """``draw(points, frame, fmt)`` of a colour video's frame: its inks' layers, as ``stipple colour`` draws them."""
+    from ..io.writers import layered_torus_output
+
+    settings = {key: value for key, value in settings.items() if key != "color"}
+
+    def draw(points, frame, fmt):
+        placed = [(name, colour, points[part]) for name, colour, part in frame.inks]
+        coverages = [np.clip(density, 0.0, 1.0) for density in frame.density]
+        ink = float(frame.density.sum(axis=0).mean())
+        return layered_torus_output(placed, shape, fmt, ink=ink, coverages=coverages, target=frame.picture, **settings)
+
+    return draw
+
+
 def video_settings(options, shape):
     """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
+    from ..colour import parse_palette
+
     check_integer("seed", options["seed"], 0, 2**63 - 1)
+    palette = None if options["palette"] is None else parse_palette(options["palette"])
+    if not (np.isfinite(options["union_weight"]) and options["union_weight"] >= 0):
+        raise StippleError(f"--union-weight must be a finite non-negative number, not {options['union_weight']!r}")
     return VideoSettings(
         n_points=options["n_points"],
         bandwidth=options["bandwidth"],
@@ -113,6 +148,9 @@ def video_settings(options, shape):
         correct=options["correct"],
         safeguard=options["safeguard"],
         beta=options["beta"],
+        palette=palette,
+        black=options["black"],
+        union_weight=options["union_weight"],
     )
 
 
@@ -138,21 +176,34 @@ def run_frames(frames, settings, outputs, options):
     seconds, count = parse_every(options["checkpoint_every"])
     progress = FrameProgress(frames.count, not options["quiet"] and sys.stderr.isatty())
 
+    colour = settings.palette is not None
+
     def on_frame(frame):
-        outputs.add(frame.index, frame.points, frame.density)
+        if colour:
+            labels = [name for name, _, part in frame.inks for _ in range(part.stop - part.start)]
+            outputs.add(frame.index, frame.points, frame, labels)
+        else:
+            outputs.add(frame.index, frame.points, frame.density)
         progress(frame)
 
+    levels = parse_levels(options["levels"])
     identity = {
         "shape": list(frames.shape),
         "invert": bool(options["invert"]),
         "gamma": float(options["gamma"]),
+        "levels": list(levels) if isinstance(levels, tuple) else levels,
         "start": options["start"],
         "step": options["step"],
     }
+    pictures = (
+        frames.colours()
+        if colour
+        else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
+    )
     with SIGNALS.deferred() as interruption:
         try:
             result = stipple_video(
-                frames.densities(invert=options["invert"], gamma=options["gamma"]),
+                pictures,
                 settings,
                 on_frame=on_frame,
                 stop=interruption.stop_requested,
