@@ -153,3 +153,23 @@ def cut_clip(frames=16, width=208, height=128, at=None):
         view = photos[k >= at] * (1 - cover) + 0.05 * cover
         clip.append(np.round(255 * np.vstack([view, _strip(width, strip)])).astype(np.uint8))
     return clip
+
+
+def colour_clip(frames=8, width=208, height=128):
+    """uint8 RGB frames: scikit-image's coffee photo with a red disc (radius 12 px) moving right 3 px per frame
+    across it, above a still strip that runs from cyan to yellow."""
+    import skimage.data
+
+    strip = height // 4
+    photo = np.asarray(
+        Image.fromarray(skimage.data.coffee()).resize((width, height - strip), Image.Resampling.LANCZOS), float
+    )
+    t = (np.arange(width) + 0.5) / width
+    band = np.stack([255 * t, np.full(width, 200.0), 255 * (1 - t)], axis=-1)
+    y, x = np.mgrid[0 : height - strip, 0:width] + 0.5
+    clip = []
+    for k in range(frames):
+        cover = np.clip(12.5 - np.hypot(x - (0.25 * width + 3 * k), y - 0.45 * height), 0.0, 1.0)[..., None]
+        view = photo * (1 - cover) + np.array([220.0, 30.0, 30.0]) * cover
+        clip.append(np.round(np.vstack([view, np.tile(band, (strip, 1, 1))])).clip(0, 255).astype(np.uint8))
+    return clip

@@ -260,9 +260,9 @@ def _blur(values, sigma):
 def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=float("inf"), inks=None):
     """Frame ``index``'s dots: a cold run without ``previous`` points, else warm-started from them (``_warm``);
     None if ``stop`` stopped it."""
+    started = time.perf_counter()
     problem = _problem(weights, bandwidth, settings, inks)
     warm = previous is not None
-    started = time.perf_counter()
     if warm:
         result = _warm(problem, previous, free, settings, stop, change)
     else:
