@@ -168,7 +168,7 @@ def stipple_video(
     if key is not None:
         identity = {**(identity or {}), "key": frame_fingerprint(np.concatenate([np.ravel(k) for k in key]))}
     keeper = _Keeper(checkpoint, _defining(settings, identity), checkpoint_seconds, checkpoint_frames, resume)
-    previous, bandwidth, timings, status, position = None, settings.bandwidth, [], "finished", -1
+    bandwidth, timings, status, position = settings.bandwidth, [], "finished", -1
     reference, free = (None, None) if key is None else (key[1], None)
     previous, before = (None, None) if key is None else key
     inks = None if settings.palette is None else Inks(settings, None if key is None else key[1])
