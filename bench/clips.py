@@ -173,3 +173,13 @@ def colour_clip(frames=8, width=208, height=128):
         view = photo * (1 - cover) + np.array([220.0, 30.0, 30.0]) * cover
         clip.append(np.round(np.vstack([view, np.tile(band, (strip, 1, 1))])).clip(0, 255).astype(np.uint8))
     return clip
+
+
+def through_h264(clip, path):
+    """The gray frames of ``clip`` after an H.264 round trip through ``path`` (``write_mp4``; needs PyAV), as the
+    issue's clip was given."""
+    import av
+
+    write_mp4(clip, path)
+    with av.open(str(path)) as container:
+        return [frame.to_ndarray(format="gray") for frame in container.decode(video=0)]
