@@ -4,12 +4,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from PIL import Image
+from scipy.ndimage import gaussian_filter
 
 from stipple import StippleError
 from stipple.cli import main
 from stipple.evaluate import discrepancy_energy, exact_blurs
 from stipple.torus import halftone_torus, torus_problem
-from stipple.video import VideoSettings, free_dots, stipple_video
+from stipple.video import CUT, VideoSettings, frame_change, free_dots, stipple_video
 
 COUNT, BANDWIDTH = 400, 48
 
@@ -328,3 +329,23 @@ def test_levels_stretch_every_frame_alike(tmp_path):
     black, white = np.percentile(1 - first, [0.5, 99.5])
     auto = dict(frames.densities(levels="auto"))
     assert np.array_equal(auto[2], load_density(source / "2.png", levels=(black, white)))
+
+
+def test_a_cut_reruns_the_changed_part_and_leaves_the_still_part_alone():
+    rows, columns = 64, 64
+    rng = np.random.default_rng(3)
+    textures = [gaussian_filter(rng.random((36, columns)), 4.0, mode="wrap") for _ in range(2)]
+    textures = [0.1 + 0.8 * (t - t.min()) / np.ptp(t) for t in textures]
+    textures[1] += textures[0].mean() - textures[1].mean()  # the same ink in both: the strip keeps its dots
+    strip = np.tile(0.3 + 0.4 * (np.arange(columns) + 0.5) / columns, (rows - 36, 1))
+    clip = [np.vstack([textures[k], strip]) for k in (0, 0, 1)]
+    assert frame_change(clip[1], clip[2], COUNT) > CUT > frame_change(clip[0], clip[0] + 0.001, COUNT)
+    _, frames = stippled([1 - c for c in clip])
+    spacing = np.sqrt(2 / (np.sqrt(3) * COUNT / (rows * columns)))
+    before, after = frames[1].points, frames[2].points
+    still = (before[:, 1] * rows > 36 + 2 * spacing) & (before[:, 1] * rows < rows - 2 * spacing)
+    moves = np.hypot(*((after - before)[still] * [columns, rows]).T) / spacing
+    assert np.median(moves) < 0.05 and np.percentile(moves, 95) < 0.2
+    problem = torus_problem(clip[2], COUNT, BANDWIDTH, threads=1, near_field=False)
+    cold = halftone_torus(clip[2], COUNT, BANDWIDTH, threads=1).points
+    assert discrepancy_energy(problem, after) < 1.3 * discrepancy_energy(problem, cold)
