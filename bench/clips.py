@@ -76,3 +76,110 @@ def real_clip(scale=8):
     with av.open(str(path)) as container:
         frames = [frame.to_ndarray(format="rgb24") for frame in container.decode(video=0)]
     return [np.kron(frame, np.ones((scale, scale, 1), dtype=np.uint8)) for frame in frames]
+
+
+def _photo(name, width, height, offset=0):
+    """scikit-image's gray photo ``name`` resized to ``(height, width + offset)`` (float gray in [0, 1])."""
+    import skimage.data
+
+    image = Image.fromarray(getattr(skimage.data, name)())
+    return np.asarray(image.resize((width + offset, height), Image.Resampling.LANCZOS), float).clip(0, 255) / 255
+
+
+def disc_clip(frames=16, width=208, height=128):
+    """The issue's clip: a horizontal gradient from 65 % darkness at the left to 5 % at the right, a dark disc
+    (95 % darkness, radius 15 px) moving 2.5 px per frame to the right along a sine (uint8 gray frames)."""
+    y, x = np.mgrid[0:height, 0:width] + 0.5
+    base = 1 - (0.65 - 0.6 * x / width)
+    clip = []
+    for k in range(frames):
+        cx = 0.3 * width + 2.5 * k
+        cy = 0.5 * height + 0.2 * height * np.sin(2 * np.pi * 2.5 * k / 40)
+        cover = np.clip(15 + 0.5 - np.hypot(x - cx, y - cy), 0.0, 1.0)
+        clip.append(np.round(255 * (base * (1 - cover) + 0.05 * cover)).astype(np.uint8))
+    return clip
+
+
+def _matched(photo, reference):
+    """``photo`` shifted to the mean gray of ``reference``: the frame's total ink stays the same, so that a still
+    region keeps its share of the dots (the dots per pixel are M w / sum w)."""
+    return np.clip(photo - photo.mean() + reference.mean(), 0.0, 1.0)
+
+
+def _strip(width, rows):
+    """A still caption strip: a horizontal gradient (gray 0.3 to 0.9)."""
+    return np.tile(0.3 + 0.6 * (np.arange(width) + 0.5) / width, (rows, 1))
+
+
+def pan_clip(frames=16, width=208, height=128, speed=2.0):
+    """A camera pan: scikit-image's camera photo sliding left ``speed`` px per frame above a still caption strip
+    (the bottom quarter)."""
+    strip = height // 4
+    photo = _photo("camera", width, height - strip, offset=int(np.ceil(speed * frames)))
+    clip = []
+    for k in range(frames):
+        shift = speed * k
+        whole, part = int(shift), shift - int(shift)
+        view = (1 - part) * photo[:, whole : whole + width] + part * photo[:, whole + 1 : whole + 1 + width]
+        clip.append(np.round(255 * np.vstack([view, _strip(width, strip)])).astype(np.uint8))
+    return clip
+
+
+def fade_clip(frames=16, width=208, height=128):
+    """A cross-fade from the camera photo to the coins photo (shifted to the same mean gray) above a still caption
+    strip."""
+    strip = height // 4
+    first = _photo("camera", width, height - strip)
+    second = _matched(_photo("coins", width, height - strip), first)
+    clip = []
+    for k in range(frames):
+        t = k / max(frames - 1, 1)
+        clip.append(np.round(255 * np.vstack([(1 - t) * first + t * second, _strip(width, strip)])).astype(np.uint8))
+    return clip
+
+
+def cut_clip(frames=16, width=208, height=128, at=None):
+    """A cut: the camera photo, then from frame ``at`` (default the middle) the moon photo (shifted to the same mean
+    gray), above a still strip;
+    a dark disc moves across the photos so that the frames between the cuts change too."""
+    at = frames // 2 if at is None else at
+    strip = height // 4
+    first = _photo("camera", width, height - strip)
+    photos = first, _matched(_photo("moon", width, height - strip), first)
+    y, x = np.mgrid[0 : height - strip, 0:width] + 0.5
+    clip = []
+    for k in range(frames):
+        cover = np.clip(10.5 - np.hypot(x - (0.2 * width + 3 * k), y - 0.4 * height), 0.0, 1.0)
+        view = photos[k >= at] * (1 - cover) + 0.05 * cover
+        clip.append(np.round(255 * np.vstack([view, _strip(width, strip)])).astype(np.uint8))
+    return clip
+
+
+def colour_clip(frames=8, width=208, height=128):
+    """uint8 RGB frames: scikit-image's coffee photo with a red disc (radius 12 px) moving right 3 px per frame
+    across it, above a still strip that runs from cyan to yellow."""
+    import skimage.data
+
+    strip = height // 4
+    photo = np.asarray(
+        Image.fromarray(skimage.data.coffee()).resize((width, height - strip), Image.Resampling.LANCZOS), float
+    )
+    t = (np.arange(width) + 0.5) / width
+    band = np.stack([255 * t, np.full(width, 200.0), 255 * (1 - t)], axis=-1)
+    y, x = np.mgrid[0 : height - strip, 0:width] + 0.5
+    clip = []
+    for k in range(frames):
+        cover = np.clip(12.5 - np.hypot(x - (0.25 * width + 3 * k), y - 0.45 * height), 0.0, 1.0)[..., None]
+        view = photo * (1 - cover) + np.array([220.0, 30.0, 30.0]) * cover
+        clip.append(np.round(np.vstack([view, np.tile(band, (strip, 1, 1))])).clip(0, 255).astype(np.uint8))
+    return clip
+
+
+def through_h264(clip, path):
+    """The gray frames of ``clip`` after an H.264 round trip through ``path`` (``write_mp4``; needs PyAV), as the
+    issue's clip was given."""
+    import av
+
+    write_mp4(clip, path)
+    with av.open(str(path)) as container:
+        return [frame.to_ndarray(format="gray") for frame in container.decode(video=0)]

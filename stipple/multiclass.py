@@ -136,6 +136,7 @@ def multiclass_problem(
     epsilon=DEFAULT_EPSILON,
     hessian="gauss-newton",
     near_field=True,
+    counts=None,
 ):
     """The joint problem of several densities on one image with ``n_points`` dots in all.
 
@@ -155,6 +156,10 @@ def multiclass_problem(
         Factors ``a_c`` of the class terms and, last, ``a_u`` of the union term (default all 1).
     backend, threads, epsilon, hessian, near_field :
         As for ``stipple.torus.torus_problem``, for every term.
+    counts : sequence of int, optional
+        Dots per class, adding up to ``n_points`` (a video keeps them from frame to frame). Each density then
+        enters the union's in proportion to its dots: ``w_c (M_c / M) / (m_c / m)``, so that every dot carries the
+        same mass in the union's term as in its class's.
 
     Returns
     -------
@@ -169,10 +174,19 @@ def multiclass_problem(
         raise StippleError("give one name per class and one term weight per class plus one for the union")
     if not all(np.isfinite(a) and a >= 0 for a in term_weights) or not any(term_weights):
         raise StippleError(f"term weights must be finite, non-negative and not all zero, not {term_weights}")
-    counts = class_counts([weights.sum() for weights in densities], n_points)
+    masses = np.array([weights.sum() for weights in densities])
+    union_density = sum(densities)
+    if counts is None:
+        counts = class_counts(masses, n_points)
+    else:
+        counts = np.asarray(counts)
+        if counts.shape != masses.shape or np.any(counts < 0) or counts.sum() != n_points:
+            raise StippleError(f"class counts must be one per class, non-negative, adding up to {n_points}")
+        shares = np.where(masses > 0, (counts / n_points) * masses.sum() / np.maximum(masses, 1e-300), 0.0)
+        union_density = sum(share * weights for share, weights in zip(shares, densities, strict=True))
     kept = [index for index, count in enumerate(counts) if count > 0]
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
-    union = torus_problem(sum(densities), n_points, bandwidth, **options)
+    union = torus_problem(union_density, n_points, bandwidth, **options)
     classes = []
     for index in kept:
         class_band = (

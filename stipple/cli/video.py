@@ -8,7 +8,15 @@ import click
 from ..errors import StippleError
 from . import supervise
 from .defaults import BACKENDS, FRAME_ITERATIONS
-from .options import common_options, init_input, render_settings, resolve_input, without
+from .options import (
+    common_options,
+    init_input,
+    palette_options,
+    parse_levels,
+    render_settings,
+    resolve_input,
+    without,
+)
 from .supervise import SIGNALS, Progress, guarded_files, parse_every
 
 DEFAULT_FPS = 24.0
@@ -50,11 +58,19 @@ DEFAULT_FPS = 24.0
 @click.option("--start", type=click.IntRange(min=0), default=0, show_default=True, help="First frame (from 0).")
 @click.option("--stop", type=click.IntRange(min=1), default=None, help="Stop before this frame (default: the end).")
 @click.option("--step", type=click.IntRange(min=1), default=1, show_default=True, help="Take every STEP-th frame.")
+@click.option(
+    "--levels",
+    default=None,
+    help="Gray values BLACK,WHITE in [0, 1] stretched to black and white before stippling, or 'auto' (the first "
+    "frame's 0.5th and 99.5th percentiles, kept for every frame).",
+)
+@palette_options(None)
 @click.pass_context
 def video(ctx, source, **options):
     """Stipple SOURCE, a video (MP4, MOV, WebM, GIF, ...; needs stipple[video]) or a folder or glob of frame
     images, with the same dots in every frame: -o out.mp4, -o dots.csv (frame,x,y; row i of every frame is dot
-    i), -o 'frames/%04d.png' (one PNG or SVG per frame)."""
+    i), -o 'frames/%04d.png' (one PNG or SVG per frame). With --palette, one layer of dots per ink, each dot
+    keeping its ink (CSV frame,x,y,layer)."""
     from ..io.png import check_png_outputs
     from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
     from ..pipelines.outputs import torus_files
@@ -64,6 +80,10 @@ def video(ctx, source, **options):
     if source is None:
         raise click.UsageError("missing SOURCE (or 'input' in --config)")
     try:
+        if options["palette"] is not None:
+            from .recipes import check_colour_options
+
+            check_colour_options(options)
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
@@ -79,7 +99,9 @@ def video(ctx, source, **options):
             def draw(points, density, fmt):
                 return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
 
-            with VideoOutputs(plan, frames.shape, draw, fps) as outputs:
+            if options["palette"] is not None:
+                draw = colour_drawing(frames.shape, settings)
+            with VideoOutputs(plan, frames.shape, draw, fps, layered=options["palette"] is not None) as outputs:
                 result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
                 if result.frames:
                     outputs.commit()
@@ -88,13 +110,37 @@ def video(ctx, source, **options):
     finish(result, stopped_by, options, started)
 
 
+def colour_drawing(shape, settings):
+    """``draw(points, frame, fmt)`` of a colour video's frame: its inks' layers, as ``stipple colour`` draws them."""
+    import numpy as np
+
+    from ..pipelines.outputs import layered_files
+
+    settings = {key: value for key, value in settings.items() if key != "color"}
+
+    def draw(points, frame, fmt):
+        placed = [(name, colour, points[part]) for name, colour, part in frame.inks]
+        coverages = [np.clip(density, 0.0, 1.0) for density in frame.density]
+        ink = float(frame.density.sum(axis=0).mean())
+        tone = {"ink": ink, "coverages": coverages, "target": frame.picture}
+        return layered_files(placed, shape, [fmt], settings, **tone)[fmt]
+
+    return draw
+
+
 def video_settings(options, shape):
     """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
+    import numpy as np
+
+    from ..colour import parse_palette
     from ..halftone import check_integer
     from ..pipelines.inputs import read_torus_init
     from ..video import VideoSettings
 
     check_integer("seed", options["seed"], 0, 2**63 - 1)
+    palette = None if options["palette"] is None else parse_palette(options["palette"])
+    if not (np.isfinite(options["union_weight"]) and options["union_weight"] >= 0):
+        raise StippleError(f"--union-weight must be a finite non-negative number, not {options['union_weight']!r}")
     return VideoSettings(
         n_points=options["n_points"],
         bandwidth=options["bandwidth"],
@@ -113,6 +159,9 @@ def video_settings(options, shape):
         correct=options["correct"],
         safeguard=options["safeguard"],
         beta=options["beta"],
+        palette=palette,
+        black=options["black"],
+        union_weight=options["union_weight"],
     )
 
 
@@ -140,21 +189,34 @@ def run_frames(frames, settings, outputs, options):
     seconds, count = parse_every(options["checkpoint_every"])
     progress = FrameProgress(frames.count, not options["quiet"] and sys.stderr.isatty())
 
+    colour = settings.palette is not None
+
     def on_frame(frame):
-        outputs.add(frame.index, frame.points, frame.density)
+        if colour:
+            labels = [name for name, _, part in frame.inks for _ in range(part.stop - part.start)]
+            outputs.add(frame.index, frame.points, frame, labels)
+        else:
+            outputs.add(frame.index, frame.points, frame.density)
         progress(frame)
 
+    levels = parse_levels(options["levels"])
     identity = {
         "shape": list(frames.shape),
         "invert": bool(options["invert"]),
         "gamma": float(options["gamma"]),
+        "levels": list(levels) if isinstance(levels, tuple) else levels,
         "start": options["start"],
         "step": options["step"],
     }
+    pictures = (
+        frames.colours()
+        if colour
+        else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
+    )
     with SIGNALS.deferred() as interruption:
         try:
             result = stipple_video(
-                frames.densities(invert=options["invert"], gamma=options["gamma"]),
+                pictures,
                 settings,
                 on_frame=on_frame,
                 stop=interruption.stop_requested,

@@ -208,14 +208,14 @@ def stretch_levels(gray, levels):
     return np.clip((gray - black) / (white - black), 0.0, 1.0)
 
 
-def image_density(image, *, invert=False, gamma=1.0, name="input"):
+def image_density(image, *, invert=False, gamma=1.0, levels=None, name="input"):
     """Density ``w`` of a decoded PIL image, exactly as ``load_density`` makes it from an image file.
 
     Parameters
     ----------
     image : PIL.Image.Image
         A decoded picture (a video frame, say): gray values as ``load_gray`` reads them, alpha on white.
-    invert, gamma :
+    invert, gamma, levels :
         As for ``load_density``.
     name : str
         What error messages call the picture.
@@ -226,7 +226,7 @@ def image_density(image, *, invert=False, gamma=1.0, name="input"):
         ``w`` in [0, 1], shape ``(rows, columns)``: ``1 - u``, or ``u`` with ``invert``, to the power ``gamma``.
     """
     _check_gamma(gamma)
-    return _transfer(1.0 - check_grid(_gray_values(image, name), name), invert, gamma)
+    return _transfer(1.0 - stretch_levels(check_grid(_gray_values(image, name), name), levels), invert, gamma)
 
 
 def _check_gamma(gamma):

@@ -12,6 +12,7 @@ import tempfile
 import zipfile
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import partial
 
 import numpy as np
 from PIL import Image
@@ -19,7 +20,7 @@ from PIL import Image
 from ..errors import StippleError
 from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import image_density, load_density
+from .images import image_density, load_colour, load_density
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
@@ -54,13 +55,23 @@ class FrameSource:
     files: tuple
     selection: range
 
-    def densities(self, *, invert=False, gamma=1.0):
-        """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0."""
+    def densities(self, *, invert=False, gamma=1.0, levels=None):
+        """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0; ``levels`` as
+        for ``load_density``, "auto" the first frame's for every frame (a stretch changing by frame would flicker)."""
+        if levels == "auto":
+            levels = tuple(np.percentile(1 - next(self._frames(lambda load: load(False, 1, None)))[1], [0.5, 99.5]))
+        yield from self._frames(lambda load: load(invert, gamma, levels))
+
+    def colours(self):
+        """``(index, rgb)`` for every selected frame: ``(H, W, 3)`` in [0, 1], alpha composited on white."""
+        yield from self._frames(lambda load: load(None, None, None, colour=True))
+
+    def _frames(self, read):
         frames = _file_frames(self) if self.files else _video_frames(self)
         found = False
         for index, load in frames:
-            density = load(invert, gamma)
-            if density.shape != self.shape:
+            density = read(load)
+            if density.shape[:2] != self.shape:
                 raise StippleError(
                     f"{self.name}: frame {index} is {density.shape[1]}×{density.shape[0]} pixels, but the first is "
                     f"{self.shape[1]}×{self.shape[0]}; every frame must have the same size"
@@ -107,9 +118,13 @@ def _frame_files(source):
 
 
 def _file_frames(source):
+    """``(index, load)``: ``load(invert, gamma, levels)`` a frame's density, ``load(..., colour=True)`` its RGB."""
     for index in source.selection:
-        path = source.files[index]
-        yield index, lambda invert, gamma, path=path: load_density(path, invert=invert, gamma=gamma)
+        yield index, partial(_load, source.files[index])
+
+
+def _load(path, invert, gamma, levels, colour=False):
+    return load_colour(path) if colour else load_density(path, invert=invert, gamma=gamma, levels=levels)
 
 
 def _open_video(source, selection):
@@ -142,7 +157,7 @@ def _open_video(source, selection):
             if selection.start == 0
             else f"{source}: no frame in the range selected"
         )
-    video.shape = first(False, 1.0).shape
+    video.shape = first(False, 1.0, None).shape
     return video
 
 
@@ -159,18 +174,20 @@ def _video_frames(source, limit=None):
                     continue
                 _check_size(source.name, (frame.height, frame.width))
                 image = Image.fromarray(frame.to_ndarray(format="rgba"), "RGBA")
-                name = f"{source.name} frame {index}"
-                yield (
-                    index,
-                    lambda invert, gamma, image=image, name=name: image_density(
-                        image, invert=invert, gamma=gamma, name=name
-                    ),
-                )
+                yield index, partial(_decoded, image, f"{source.name} frame {index}")
                 yielded += 1
                 if limit is not None and yielded >= limit:
                     return
     except (av.FFmpegError, OSError) as error:
         raise StippleError(f"{source.name}: cannot decode the video ({_reason(error)})") from None
+
+
+def _decoded(image, name, invert, gamma, levels, colour=False):
+    """A decoded frame's density, or its colours in [0, 1] alpha composited on white (as ``load_colour``)."""
+    if not colour:
+        return image_density(image, invert=invert, gamma=gamma, levels=levels, name=name)
+    rgba = np.asarray(image, dtype=np.float64) / 255.0
+    return rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
 
 
 def _reason(error):
@@ -246,13 +263,13 @@ class VideoOutputs:
 
     ``plan`` is ``plan_outputs``'s; ``draw(points, density, fmt)`` makes one frame's bytes of ``fmt`` (``.png``
     or ``.svg``; ``points`` in unit coordinates of an image of ``shape``, placed from the ``density`` w). The
-    CSV (``frame,x,y`` in pixels, row i of every frame is dot i) and the MP4 are streamed into temporary files
-    beside their targets; each frame pattern's files are staged one by one. Leaving the ``with`` block without
-    ``commit`` removes them all.
+    CSV (``frame,x,y`` in pixels, row i of every frame is dot i; ``layered``: ``frame,x,y,layer``) and the MP4
+    are streamed beside their targets, each frame pattern's files staged one by one; leaving the ``with`` block
+    without ``commit`` removes them all.
     """
 
-    def __init__(self, plan, shape, draw, fps):
-        self.plan, self.shape, self.draw, self.fps = plan, shape, draw, fps
+    def __init__(self, plan, shape, draw, fps, layered=False):
+        self.plan, self.shape, self.draw, self.fps, self.layered = plan, shape, draw, fps, layered
         self.staged = StagedOutputs()
         self.tables, self.movies, self.frames = [], [], 0
 
@@ -260,7 +277,7 @@ class VideoOutputs:
         self.staged.__enter__()
         for path in self.plan["csv"]:
             stream = tempfile.TemporaryFile() if path == "-" else open(self.staged.reserve(path), "wb")
-            stream.write(b"frame,x,y\n")
+            stream.write(b"frame,x,y,layer\n" if self.layered else b"frame,x,y\n")
             self.tables.append((path, stream))
         self.movies = [Mp4Stream(self.staged.reserve(path), path, self.fps) for path in self.plan["mp4"]]
         return self
@@ -269,11 +286,12 @@ class VideoOutputs:
         self._close()
         self.staged.__exit__(*exc)
 
-    def add(self, index, points, density):
-        """Stage frame ``index`` (its number in the source): CSV rows, frame files and the MP4's picture."""
+    def add(self, index, points, density, labels=None):
+        """Stage frame ``index`` (its number in the source): CSV rows (with the dots' ``labels``), frames, MP4."""
         rows, columns = self.shape
         pixels = points * np.array([columns, rows])
-        lines = "".join(f"{index},{x:.6f},{y:.6f}\n" for x, y in pixels).encode()
+        ends = [f",{label}\n" for label in labels] if self.layered else ["\n"] * len(pixels)
+        lines = "".join(f"{index},{x:.6f},{y:.6f}{end}" for (x, y), end in zip(pixels, ends, strict=True)).encode()
         for path, stream in self.tables:
             _write(stream, path, lines)
         drawn = {}
