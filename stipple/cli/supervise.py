@@ -239,6 +239,8 @@ def plot_order(centres, points, options, unit):
     """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
     if not options.get("order"):
         return points
+    if options["order"] == "progressive":
+        raise StippleError("--order progressive is for stipple torus with one ink; use --order here")
     order, before, after = plotter_order(centres)
     if not options.get("quiet"):
         click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {unit}", err=True)

@@ -108,6 +108,7 @@ def layered_torus_output(
     style="tone",
     coverages=None,
     target=None,
+    notes=(),
 ):
     """Bytes of layered torus dots in ``fmt``; ``layers`` are ``(name, colour, points)`` with points in unit
     coordinates of an image of ``shape = (H, W)``.
@@ -120,8 +121,10 @@ def layered_torus_output(
     at 0.45 × the distance to the nearest dot of any layer, so no two dots touch, and the drawing inset by the
     largest radius (``stipple.drawing.flat_dots``). The CSV keeps the exact positions. ``dot_radius``
     (physical ``(value, unit)``) fixes every radius. ``dot_style`` "disc" draws filled discs; "circle",
-    "filled" and "point" pen paths ``pen_width`` wide (a plotter preview in the PNG).
+    "filled" and "point" pen paths ``pen_width`` wide (a plotter preview in the PNG). ``notes`` are added to
+    the SVG's comments and description.
     """
+    extra_notes = list(notes)
     rows, columns = shape
     count = sum(len(points) for _, _, points in layers)
     placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
@@ -141,6 +144,7 @@ def layered_torus_output(
         drawn = with_pen_paths(drawn, dot_style, pen)
         margin = _margin(drawn, stroke)
         notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
+    notes = [*notes, *extra_notes]
     return draw_layers(
         drawn,
         fmt,
