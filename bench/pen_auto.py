@@ -79,7 +79,7 @@ def main(argv=None):
     stipple = options.stipple.split()
     from stipple.pen_count import reachable_tone
 
-    reachable = reachable_tone(options.style)
+    reachable = float(reachable_tone(options.style))
     summary = []
     for name, image in make_inputs(folder, options.pixels).items():
         for pen in (float(p) for p in options.pens.split(",")):
@@ -98,7 +98,7 @@ def tone_entry(report, reachable):
     for tenth in measure["tone_curve"]:
         source, drawn = tenth["input"], tenth["output"]
         tenths.append(
-            {"input": source, "drawn": drawn, "pixels": tenth["pixels"], "reachable": 1 - source <= reachable}
+            {"input": source, "drawn": drawn, "pixels": tenth["pixels"], "reachable": bool(1 - source <= reachable)}
         )
     worst = max((abs(t["drawn"] - t["input"]) for t in tenths if t["reachable"]), default=None)
     return {"tenths": tenths, "worst_reachable": worst, "reachable_tone": reachable}

@@ -125,3 +125,37 @@ def progressive_order(centres, counts):
         [start + plotter_order(centres[start:end])[0] for start, end in zip(ends - counts, ends, strict=True)]
     )
     return order, path_length(centres), path_length(centres[order])
+
+
+def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=None, **options):
+    """``stipple.colour.halftone_colour`` for one ink with nested levels: ``(layers, result, counts)``.
+
+    ``union_weight`` is ignored (one ink has no union term); ``options`` are ``progressive_problem``'s and
+    ``stipple.halftone.run``'s. ``counts`` are the passes' dots, in array order.
+    """
+    from .colour import separate
+    from .errors import StippleError
+    from .halftone import run
+    from .io.images import load_colour
+
+    layers = separate(rgb if isinstance(rgb, np.ndarray) else load_colour(rgb), separation, black)
+    if len(layers) != 1:
+        raise StippleError(f"--order progressive is for one ink (gray or one pen), not {len(layers)} inks")
+    keys = ("backend", "threads", "epsilon", "hessian", "near_field", "levels")
+    settings = {key: options.pop(key) for key in keys if key in options}
+    problem = progressive_problem(layers[0].density, n_points, **settings)
+    counts = np.diff([0] + [part.stop for part in problem.slices])
+    return layers, run(problem, **options), counts
+
+
+def order_dots(dots, order=None, counts=None):
+    """``stipple.drawing.Dots`` in plotting order: unchanged (None), along one short path ("path"), or pass by
+    pass (``"progressive"``, ``counts`` dots per pass)."""
+    if order is None or len(dots.centres) < 2:
+        return dots
+    if order == "progressive":
+        visit = progressive_order(dots.centres, counts)[0]
+    else:
+        visit = plotter_order(dots.centres)[0]
+    dots.centres, dots.radii = dots.centres[visit], dots.radii[visit]
+    return dots

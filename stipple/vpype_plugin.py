@@ -18,26 +18,37 @@ from .drawing import flat_dots
 from .errors import StippleError
 from .line import LINE_ITERATIONS
 from .plotter import DOT_STYLES, dot_paths
+from .progressive import order_dots, progressive_colour
 
 
-def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
+def ink_layers(
+    image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, order=None, **options
+):
     """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
 
     ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
     together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
-    nearest dot, and every dot lies inside the image (``stipple.drawing.flat_dots``).
+    nearest dot, and every dot lies inside the image (``stipple.drawing.flat_dots``). ``order`` "path" draws each
+    layer along one short pen path, "progressive" (one ink) in passes (``stipple.progressive``).
     """
-    layers, problem, result = halftone_colour(image, n_points, separation=parse_palette(separation), **options)
+    counts, palette = None, parse_palette(separation)
+    if order == "progressive":
+        layers, result, counts = progressive_colour(image, n_points, separation=palette, **options)
+        parts = [slice(None)]
+    else:
+        layers, problem, result = halftone_colour(image, n_points, separation=palette, **options)
+        parts = problem.slices
     rows, columns = layers[0].density.shape
     scale = width / columns
     ink = sum(layer.density for layer in layers).mean()
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
     placed = [
         (layer.name, layer.colour, result.points[part] * np.array([columns, rows]) * scale)
-        for layer, part in zip(layers, problem.slices, strict=True)
+        for layer, part in zip(layers, parts, strict=True)
     ]
     dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
+    dots = [order_dots(d, order, counts) for d in dots]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
 
@@ -62,6 +73,12 @@ def ink_layers(image, n_points, *, width, separation="gray", dot_style="circle",
 @click.option("--iterations", type=vpype_cli.IntegerType(), default=2000, show_default=True)
 @click.option("--tol", type=float, default=1e-4, show_default=True)
 @click.option("--seed", type=vpype_cli.IntegerType(), default=0, show_default=True)
+@click.option(
+    "--order",
+    type=click.Choice(["path", "progressive"]),
+    default=None,
+    help="Each layer along one short pen path, or (one ink) in passes whose every prefix is an even stipple.",
+)
 @vpype_cli.global_processor
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""

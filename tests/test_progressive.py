@@ -120,3 +120,40 @@ def test_progressive_elsewhere_is_refused(tmp_path, command):
     extra = ["-d", str(tmp_path / "out")] if command[0] == "batch" else ["-o", str(tmp_path / "o.csv")]
     result = CliRunner().invoke(main, [*command, "-M", "50", "--iterations", "2", "--order", "progressive", *extra])
     assert result.exit_code != 0 and "progressive" in result.output and "Traceback" not in result.output
+
+
+def test_vpype_plugin_progressive_keeps_one_layer_per_pen(tmp_path):
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    from stipple.plotter import path_length
+
+    image = gray(tmp_path)
+    document = vpype_cli.execute(
+        f"stipple -M 200 --iterations 40 --dot-style point --width 100mm --order progressive {image}"
+    )
+    (layer,) = document.layers.values()
+    assert layer.property(vpype.METADATA_FIELD_NAME) == "black" and len(layer) == 200
+    centres = np.array([path[0] for path in layer])
+    # Pass by pass: each quarter alone is spread over the page (its dots' bounding box covers most of it) ...
+    for start in range(0, 200, 50):
+        part = centres[start : start + 50]
+        assert np.ptp(part.real) > 0.7 * np.ptp(centres.real) and np.ptp(part.imag) > 0.7 * np.ptp(centres.imag)
+    # ... and drawn along a short path: shorter than the passes' dots in a random order.
+    rng = np.random.default_rng(0)
+    shuffled = np.concatenate([rng.permutation(centres[start : start + 50]) for start in range(0, 200, 50)])
+    pairs = np.stack([centres.real, centres.imag], axis=1)
+    random_pairs = np.stack([shuffled.real, shuffled.imag], axis=1)
+    assert path_length(pairs) < 0.5 * path_length(random_pairs)
+    path = vpype_cli.execute(f"stipple -M 200 --iterations 40 --dot-style point --width 100mm --order path {image}")
+    assert len(next(iter(path.layers.values()))) == 200
+
+
+def test_vpype_plugin_progressive_refuses_several_inks(tmp_path):
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    rgb = tmp_path / "rgb.png"
+    Image.fromarray(np.random.default_rng(1).integers(0, 255, (8, 8, 3), dtype=np.uint8)).save(rgb)
+    with pytest.raises(Exception, match="one ink"):
+        vpype_cli.execute(f"stipple -M 50 --iterations 2 --separation cmyk --order progressive {rgb}")
