@@ -10,7 +10,10 @@ and ``stipple evaluate out.png INPUT --json``, and writes ``out/pen_auto/summary
 reachable tone, and per tenth of the input's luminance the drawn luminance (sigma 2 px) and whether the tenth
 is within the packing's reach (its darkness at most the reachable tone).
 
-    python bench/pen_auto.py [--pens 0.3,0.6] [--style point] [--width 60] [--pixels 160] [--out DIR]
+    python bench/pen_auto.py [--pens 0.3,0.6] [--style point] [--width 60] [--pixels 160] [--out DIR] [--reuse]
+
+The picture is evaluated with ``--inset`` (the drawing's inset in input pixels), which registers the inset
+drawing with the input: without it the page's dark edge is compared with the drawing's edge 0.8 px inwards.
 """
 
 import argparse
@@ -53,17 +56,31 @@ def run_case(stipple, image, pen, options, folder):
     picture = folder / f"{image.stem}-{pen}mm-{options.style}.png"
     command = [*stipple, "torus", str(image), "-M", "auto", "--dot-style", options.style, "--pen-width", f"{pen}mm"]
     command += ["--width", f"{options.width}mm", "-o", str(picture), "--png-width", "2048", "-v"]
-    run = subprocess.run(command, capture_output=True, text=True, check=True)
-    chosen = [line for line in run.stderr.splitlines() if "-M auto" in line or "packing count" in line]
+    log = picture.with_suffix(".log")
+    if not (options.reuse and log.exists() and picture.exists()):
+        log.write_text(subprocess.run(command, capture_output=True, text=True, check=True).stderr)
+    chosen = [line for line in log.read_text().splitlines() if "-M auto" in line or "packing count" in line]
+    inset = drawing_inset(image, int(chosen[0].split("-M auto: ")[1].split()[0]), pen, options.width)
     report = json.loads(
         subprocess.run(
-            [*stipple, "evaluate", str(picture), str(image), "--json", "-", "--sigma", "2"],
+            [*stipple, "evaluate", str(picture), str(image), "--json", "-", "--sigma", "2", "--inset", f"{inset:.6f}"],
             capture_output=True,
             text=True,
             check=True,
         ).stdout
     )
     return chosen, report
+
+
+def drawing_inset(image, count, pen, width):
+    """The plotter style's inset in input pixels (``stipple.drawing.flat_dots``): the larger of the tone radius
+    and half the pen, so that ``stipple evaluate --inset`` registers the picture with the input."""
+    from stipple.drawing import ink_radius
+    from stipple.io.images import load_input
+
+    darkness = load_input(str(image))
+    rows, columns = darkness.shape
+    return max(ink_radius(darkness.mean() * rows * columns, count), pen * columns / width / 2)
 
 
 def main(argv=None):
@@ -74,6 +91,7 @@ def main(argv=None):
     parser.add_argument("--pixels", type=int, default=160)
     parser.add_argument("--out", default=str(ROOT / "out" / "pen_auto"))
     parser.add_argument("--stipple", default=f"{sys.executable} -m stipple")
+    parser.add_argument("--reuse", action="store_true", help="Re-evaluate the pictures that exist.")
     options = parser.parse_args(argv)
     folder = Path(options.out)
     stipple = options.stipple.split()

@@ -107,20 +107,22 @@ def run_case(name, image, count, folder):
 def table(summary):
     """Markdown rows: image, M, per prefix the E_N and RMSE ratios, and the travel ratio."""
     lines = [
-        "| image | M | E_N ratio 25 / 50 / 100 % | RMSE ratio 25 / 50 / 100 % (σ 2 px) "
+        "| image | M | E_N ratio 25 / 50 / 100 % | RMSE ratio σ 2 px, 25 / 50 / 100 % | RMSE ratio σ 4 px "
         "| pen-up travel progressive / one path |",
-        "|---|---|---|---|---|",
+        "|---|---|---|---|---|---|",
     ]
     for entry in summary:
-        energy, rmse = [], []
+        energy, rmse, rmse4 = [], [], []
         for fraction in FRACTIONS:
             part = entry[f"{int(fraction * 100)}%"]
             energy.append(part["progressive"]["energy_ratio"] / part["independent"]["energy_ratio"])
             rmse.append(part["progressive"]["rmse2"] / part["independent"]["rmse2"])
+            rmse4.append(part["progressive"]["rmse4"] / part["independent"]["rmse4"])
         travel_ratio = entry["travel_progressive"] / entry["travel_path"]
         lines.append(
             f"| {entry['image']} | {entry['M']} | {' / '.join(f'{v:.2f}' for v in energy)} | "
-            f"{' / '.join(f'{v:.2f}' for v in rmse)} | {entry['travel_progressive']:.4g} / {entry['travel_path']:.4g} "
+            f"{' / '.join(f'{v:.2f}' for v in rmse)} | {' / '.join(f'{v:.2f}' for v in rmse4)} | "
+            f"{entry['travel_progressive']:.4g} / {entry['travel_path']:.4g} "
             f"mm = {travel_ratio:.2f} |"
         )
     return "\n".join(lines)

@@ -7,12 +7,13 @@ levels as its terms:
     E(p) = sum_k a_k E(p[:m_k]; w),    a_k = (m_k / M) ** LEVEL_POWER,
 
 each level's own discrepancy (with its own default bandwidth and near field) against the same density, so every
-prefix is a stipple of the whole image at its own density. ``E`` of an optimised stipple falls faster than
-``1/M`` with M, so equal factors would let the first quarter's term dominate; ``a_k`` weighs the levels so that
-each one's relative excess counts alike. The start is the stratified one (dots shared out along a Hilbert
-curve) dealt into passes in bit-reversed turns (for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...), so
-every level starts spread over the image. On paper each pass is drawn along its own short pen path
-(``stipple.plotter.plotter_order``), the passes one after another.
+prefix is a stipple of the whole image at its own density. ``a_k = m_k / M`` (each level by its share of the dots);
+on the cat at M = 3000, powers 0, 1 and 1.5 gave the levels E_N within 1.02-1.17, 1.04-1.16 and 1.08-1.18 of
+independent stipples, and 1 the lowest picture errors. The start is the stratified one (dots shared out along a
+Hilbert curve) dealt into passes in bit-reversed turns (for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...),
+so every level starts spread over the image. The low-frequency correction (``stipple.halftone``) runs on the full
+set, as for one stipple: its smooth deformation moves every level alike. On paper each pass is drawn along its own
+short pen path (``stipple.plotter.plotter_order``), the passes one after another.
 """
 
 import numpy as np
@@ -22,7 +23,7 @@ from .plotter import path_length, plotter_order
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
 
 LEVELS = 4
-LEVEL_POWER = 1.5
+LEVEL_POWER = 1.0
 
 
 def pass_offsets(levels):
@@ -104,6 +105,7 @@ def progressive_problem(
         sample=full.sample,
         stratified=lambda rng, count: interleave(full.stratified(rng, count), levels),
         settle=full.settle,
+        coarse=full.coarse,
         settings={
             **full.settings,
             "order": "progressive",

@@ -157,3 +157,9 @@ def test_vpype_plugin_progressive_refuses_several_inks(tmp_path):
     Image.fromarray(np.random.default_rng(1).integers(0, 255, (8, 8, 3), dtype=np.uint8)).save(rgb)
     with pytest.raises(Exception, match="one ink"):
         vpype_cli.execute(f"stipple -M 50 --iterations 2 --separation cmyk --order progressive {rgb}")
+
+
+def test_low_frequency_correction_runs_on_the_full_set():
+    problem = progressive_problem(density(), 48, threads=1)
+    coarse = problem.coarse(8)
+    assert coarse.n_points == 48 and coarse.bandwidth == 8 and problem.settle > 0
