@@ -5,7 +5,8 @@ groups (Inkscape layers or not, as ``vpype read`` takes them), shapes outside an
 own; ``path`` (lines, Bézier curves, arcs), ``polyline``, ``polygon``, ``line``, ``rect``, ``circle`` and
 ``ellipse`` become polylines, with the ``transform`` of every enclosing group applied. A path's every ``M`` starts
 a new pen-down stroke. Curves and round shapes are flattened finely enough that a circle's length is within
-``1e-4`` of ``2 pi r``. Documents with a DTD (entities) are refused: nothing is expanded.
+``1e-4`` of ``2 pi r``. Documents that declare entities are refused: nothing is expanded (a plain ``DOCTYPE``
+naming the SVG 1.1 DTD is read; the DTD is never fetched).
 """
 
 import re
@@ -45,8 +46,8 @@ def read_pen_layers(source):
     """
     name = str(getattr(source, "name", source))
     data = read_source(source, MAX_SVG_BYTES)
-    if b"<!DOCTYPE" in data or b"<!ENTITY" in data:
-        raise StippleError(f"{name}: SVGs with a DTD or entities are not read")
+    if b"<!ENTITY" in data:
+        raise StippleError(f"{name}: SVGs that declare entities are not read (nothing is expanded)")
     try:
         root = ElementTree.fromstring(data)
     except ElementTree.ParseError as error:

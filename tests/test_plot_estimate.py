@@ -141,7 +141,7 @@ def test_json_report_and_text(tmp_path):
 @pytest.mark.parametrize(
     "body, message",
     [
-        ('<!DOCTYPE svg [<!ENTITY a "aaaa">]><svg xmlns="http://www.w3.org/2000/svg">&a;</svg>', "DTD"),
+        ('<!DOCTYPE svg [<!ENTITY a "aaaa">]><svg xmlns="http://www.w3.org/2000/svg">&a;</svg>', "entities"),
         ("<svg", "not a readable SVG"),
         ("<html></html>", "not an SVG"),
         ('<svg xmlns="http://www.w3.org/2000/svg"><path d="10,10 L 20"/></svg>', "path data"),
@@ -177,3 +177,14 @@ def test_matches_vpype_lengths(tmp_path, rng):
         assert ours.pen_down * millimetre == pytest.approx(document.length(), rel=1e-3)
         assert ours.pen_up * millimetre == pytest.approx(document.pen_up_length(), rel=1e-3)
         assert ours.paths == sum(len(layer) for layer in document.layers.values())
+
+
+def test_a_plain_doctype_is_read(tmp_path):
+    path = tmp_path / "old.svg"
+    path.write_text(
+        '<?xml version="1.0"?>\n<!DOCTYPE svg PUBLIC "-//W3C//DTD SVG 1.1//EN" '
+        '"http://www.w3.org/Graphics/SVG/1.1/DTD/svg11.dtd">\n'
+        '<svg xmlns="http://www.w3.org/2000/svg" width="96px" height="96px"><line x1="0" y1="0" x2="96" y2="0"/></svg>'
+    )
+    estimate = plot_estimate(read_pen_layers(path))
+    assert estimate.total.pen_down == pytest.approx(25.4) and estimate.layers[0].name == "(outside layers)"
