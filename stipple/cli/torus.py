@@ -5,15 +5,15 @@ import time
 import click
 import numpy as np
 
-from ..batch import TorusRecipe, draw_image, image_problem
+from ..batch import TorusRecipe, draw_image
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..io.images import load_input
 from ..io.points import read_torus_init
-from ..plotter import physical_centres
 from ..transforms import BACKENDS
 from .options import common_options, init_input, palette_options, parse_levels, render_settings, resolve_input
-from .supervise import finish, guarded_files, plot_order, solve, write_outputs
+from .pen import pen_count_recipe, pen_points, pen_problem
+from .supervise import finish, guarded_files, solve, write_outputs
 
 
 @click.command()
@@ -114,60 +114,6 @@ def torus_recipe(options):
         },
         draw=render_settings(options),
         order=bool(options["order"]),
-    )
-
-
-def pen_problem(weights, formats, recipe, options):
-    """The run's problem: the image's, or with ``--order progressive`` the nested levels' (``stipple.progressive``)."""
-    if options["order"] != "progressive":
-        return image_problem(weights, formats, recipe)
-    from ..io.png import check_png_outputs
-    from ..progressive import progressive_problem
-
-    settings = dict(recipe.problem)
-    n_points = settings.pop("n_points")
-    check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
-    return progressive_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
-
-
-def pen_points(points, problem, shape, width, options):
-    """``points`` in their plotting order: ``--order`` one short path, ``--order progressive`` pass by pass."""
-    centres = physical_centres(points, shape, width)
-    if options["order"] != "progressive":
-        return plot_order(centres, points, options, width[1])
-    from ..progressive import progressive_order
-
-    counts = np.diff([0] + [part.stop for part in problem.slices])
-    order, before, after = progressive_order(centres, counts)
-    if not options["quiet"]:
-        passes = ", ".join(str(count) for count in counts)
-        message = f"pen-up travel {before:.4g} -> {after:.4g} {width[1]} in passes of {passes} dots"
-        click.echo(f"stipple: {message}", err=True)
-    return points[order]
-
-
-def pen_count_recipe(recipe, weights, options):
-    """The recipe with ``-M auto`` resolved from the pen (``stipple.pen_count``); the choice on stderr and in
-    the SVG's notes."""
-    if options["n_points"] != "auto":
-        return recipe
-    from dataclasses import replace
-
-    from ..io.units import UNITS
-    from ..pen_count import auto_count
-
-    draw = recipe.draw
-    millimetres = [value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"])]
-    count = auto_count(weights, millimetres[0], draw["dot_style"], millimetres[1])
-    lines = [count.reason()] + [line for line in (count.note(),) if line]
-    if not options["quiet"]:
-        for line in lines + ([count.details()] if options["verbose"] else []):
-            click.echo(f"stipple: {line}", err=True)
-    options["n_points"] = count.n_points
-    return replace(
-        recipe,
-        problem={**recipe.problem, "n_points": count.n_points},
-        draw={**draw, "notes": (*draw.get("notes", ()), *lines)},
     )
 
 
