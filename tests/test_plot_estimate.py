@@ -188,3 +188,22 @@ def test_a_plain_doctype_is_read(tmp_path):
     )
     estimate = plot_estimate(read_pen_layers(path))
     assert estimate.total.pen_down == pytest.approx(25.4) and estimate.layers[0].name == "(outside layers)"
+
+
+def test_svgs_that_vpype_writes(tmp_path):
+    vp = pytest.importorskip("vpype")
+    import vpype_cli
+
+    path = tmp_path / "vpype.svg"
+    vpype_cli.execute(
+        f"rect -l 1 10mm 10mm 30mm 20mm circle -l 2 60mm 40mm 15mm line -l 2 0 0 5cm 5cm translate 1cm 1cm write {path}"
+    )
+    # vpype crops to the page when reading (the circle overhangs it); a plotter draws what the file holds
+    document = vp.read_multilayer_svg(str(path), quantization=0.1, crop=False)
+    estimate = plot_estimate(read_pen_layers(path))
+    assert [layer.paths for layer in estimate.layers] == [len(layer) for layer in document.layers.values()]
+    millimetre = 96 / 25.4
+    for ours, theirs in zip(estimate.layers, document.layers.values(), strict=True):
+        assert ours.pen_down * millimetre == pytest.approx(theirs.length(), rel=1e-3)
+        assert ours.pen_up * millimetre == pytest.approx(theirs.pen_up_length()[0], abs=1e-6, rel=1e-3)
+    assert estimate.layers[0].pen_down == pytest.approx(2 * (30 + 20), rel=1e-6)
