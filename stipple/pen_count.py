@@ -122,3 +122,12 @@ def auto_count(darkness, paper_width, style, pen_width):
         )
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
     return PenCount(count, tone_points, packing_points, area, ink, paper, float(reachable), darkest)
+
+
+def ink_darkness(image, separation="gray", black=1.0):
+    """The total ink density (H, W) of an image file over its inks (``stipple.colour.separate``): what
+    ``auto_count`` counts dots for when every ink is drawn with the same pen."""
+    from .colour import separate
+    from .io.images import load_colour
+
+    return np.clip(sum(layer.density for layer in separate(load_colour(image), separation, black)), 0.0, 1.0)

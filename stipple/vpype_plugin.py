@@ -55,7 +55,14 @@ def ink_layers(
 
 @click.command("stipple")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
-@click.option("-M", "--points", "n_points", type=vpype_cli.IntegerType(), default=10000, show_default=True)
+@click.option(
+    "-M",
+    "--points",
+    "n_points",
+    default="10000",
+    show_default=True,
+    help="Number of dots, or 'auto': from --pen-width, --dot-style and --width (stipple's docs/plotters.md).",
+)
 @click.option(
     "--palette",
     "--separation",
@@ -83,6 +90,7 @@ def ink_layers(
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
+        n_points = plugin_count(n_points, image, width, pen_width, options)
         drawn, height = ink_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
@@ -98,6 +106,25 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
 
 
 stipple.help_group = "Plugins"
+
+CSS_PIXEL_MM = 25.4 / 96
+
+
+def plugin_count(text, image, width, pen_width, options):
+    """``-M``: a whole number, or ``auto`` from the pen and the page (``stipple.pen_count``; the choice on stderr)."""
+    from .pen_count import auto_count, ink_darkness
+
+    if str(text).strip().lower() != "auto":
+        try:
+            return int(text)
+        except ValueError:
+            raise StippleError(f"-M must be a whole number or 'auto', not {text!r}") from None
+    darkness = ink_darkness(image, parse_palette(options["separation"]), options["black"])
+    count = auto_count(darkness, width * CSS_PIXEL_MM, options["dot_style"], pen_width * CSS_PIXEL_MM)
+    for line in (count.reason(), count.note()):
+        if line:
+            click.echo(f"stipple: {line}", err=True)
+    return count.n_points
 
 
 def line_path(image, n_vertices, *, width, length=None, invert=False, **options):

@@ -103,3 +103,17 @@ def test_batch_refuses_auto(tmp_path):
     image = flat_gray(tmp_path, 0.3, size=16)
     result = CliRunner().invoke(main, ["batch", str(image), "-d", str(tmp_path / "out"), "-M", "auto"])
     assert result.exit_code != 0 and "-M auto" in result.output and "Traceback" not in result.output
+
+
+def test_vpype_plugin_auto_count(tmp_path):
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    image = flat_gray(tmp_path, 0.3, size=32)
+    document = vpype_cli.execute(
+        f"stipple -M auto --dot-style point --pen-width 0.5mm --width 20mm --iterations 5 --order path {image}"
+    )
+    expected = auto_count(np.full((32, 32), 1 - round(255 * 0.7) / 255), 20.0, "point", 0.5).n_points
+    assert sum(len(layer) for layer in document.layers.values()) == expected
+    with pytest.raises(Exception, match="whole number or 'auto'"):
+        vpype_cli.execute(f"stipple -M lots {image}")
