@@ -17,33 +17,51 @@ from .colour import halftone_colour, parse_palette
 from .errors import StippleError
 from .line import LINE_ITERATIONS
 from .pipelines.colour import ink_layers
+from .progressive import order_dots, progressive_colour
 from .render.dots import flat_dots
 from .render.pen import dot_paths
 from .render.styles import DOT_STYLES
 
 
-def pen_layers(image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, **options):
+def pen_layers(
+    image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, order=None, **options
+):
     """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
 
     ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
     together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
-    nearest dot, and every dot lies inside the image (``stipple.render.dots.flat_dots``).
+    nearest dot, and every dot lies inside the image (``stipple.render.dots.flat_dots``). ``order`` "path" draws
+    each layer along one short pen path, "progressive" (one ink) in passes (``stipple.progressive``).
     """
-    layers, problem, result = halftone_colour(image, n_points, separation=parse_palette(separation), **options)
+    counts, palette = None, parse_palette(separation)
+    if order == "progressive":
+        layers, result, counts = progressive_colour(image, n_points, separation=palette, **options)
+        inks = [(layers[0].name, layers[0].colour, result.points)]
+        ink = layers[0].density.mean()
+    else:
+        layers, problem, result = halftone_colour(image, n_points, separation=palette, **options)
+        inks, ink = ink_layers(layers, problem, result)
     rows, columns = layers[0].density.shape
     scale = width / columns
-    inks, ink = ink_layers(layers, problem, result)
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
     placed = [(name, colour, points * np.array([columns, rows]) * scale) for name, colour, points in inks]
     dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
+    dots = [order_dots(d, order, counts) for d in dots]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
 
 
 @click.command("stipple")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
-@click.option("-M", "--points", "n_points", type=vpype_cli.IntegerType(), default=10000, show_default=True)
+@click.option(
+    "-M",
+    "--points",
+    "n_points",
+    default="10000",
+    show_default=True,
+    help="Number of dots, or 'auto': from --pen-width, --dot-style and --width (stipple's docs/plotters.md).",
+)
 @click.option(
     "--palette",
     "--separation",
@@ -61,10 +79,17 @@ def pen_layers(image, n_points, *, width, separation="gray", dot_style="circle",
 @click.option("--iterations", type=vpype_cli.IntegerType(), default=2000, show_default=True)
 @click.option("--tol", type=float, default=1e-4, show_default=True)
 @click.option("--seed", type=vpype_cli.IntegerType(), default=0, show_default=True)
+@click.option(
+    "--order",
+    type=click.Choice(["path", "progressive"]),
+    default=None,
+    help="Each layer along one short pen path, or (one ink) in passes whose every prefix is an even stipple.",
+)
 @vpype_cli.global_processor
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
+        n_points = plugin_count(n_points, image, width, pen_width, options)
         drawn, height = pen_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
@@ -80,6 +105,26 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
 
 
 stipple.help_group = "Plugins"
+
+CSS_PIXEL_MM = 25.4 / 96
+
+
+def plugin_count(text, image, width, pen_width, options):
+    """``-M``: a whole number, or ``auto`` from the pen and the page (``stipple.render.pen_count``; the choice on
+    stderr)."""
+    from .render.pen_count import auto_count, ink_darkness
+
+    if str(text).strip().lower() != "auto":
+        try:
+            return int(text)
+        except ValueError:
+            raise StippleError(f"-M must be a whole number or 'auto', not {text!r}") from None
+    darkness = ink_darkness(image, parse_palette(options["separation"]), options["black"])
+    count = auto_count(darkness, width * CSS_PIXEL_MM, options["dot_style"], pen_width * CSS_PIXEL_MM)
+    for line in (count.reason(), count.note()):
+        if line:
+            click.echo(f"stipple: {line}", err=True)
+    return count.n_points
 
 
 def line_path(image, n_vertices, *, width, length=None, invert=False, **options):

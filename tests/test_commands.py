@@ -54,12 +54,18 @@ def test_the_help_defaults_are_the_librarys():
     from stipple import halftone, optimize, transforms, video
     from stipple.cli import defaults
     from stipple.line import LINE_ITERATIONS
+    from stipple.measures import plot_estimate
+    from stipple.pipelines import pen
 
     assert defaults.BETAS == optimize.BETAS and defaults.SETTLE_WINDOW == optimize.SETTLE_WINDOW
     assert defaults.INITS == halftone.INITS and defaults.DEFAULT_SETTLE == halftone.DEFAULT_SETTLE
     assert defaults.BACKENDS == transforms.BACKENDS
     assert defaults.FRAME_ITERATIONS == video.FRAME_ITERATIONS
     assert defaults.LINE_ITERATIONS == LINE_ITERATIONS
+    assert defaults.DEFAULT_SPEED == plot_estimate.DEFAULT_SPEED
+    assert defaults.DEFAULT_TRAVEL_SPEED == plot_estimate.DEFAULT_TRAVEL_SPEED
+    assert defaults.DEFAULT_LIFT == plot_estimate.DEFAULT_LIFT
+    assert defaults.ORDERS == pen.ORDERS
 
 
 def test_the_command_line_loads_without_numpy():

@@ -97,6 +97,10 @@ def plan(inputs, options):
     if options["init"] not in INITS:
         raise StippleError(f"--init for a batch must be one of {', '.join(INITS)}, not {options['init']!r}")
     check_integer("seed", options["seed"], 0, 2**63 - 1)
+    if options["n_points"] == "auto":
+        raise StippleError("-M auto is for stipple torus, one image at a time; give a batch -M as a number")
+    if options["order"] == "progressive":
+        raise StippleError("--order progressive is for stipple torus, one image at a time; use --order here")
     formats = parse_formats(options["formats"])
     recipe = torus_recipe(options)
     out_dir = options["out_dir"]

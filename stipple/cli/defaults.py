@@ -14,3 +14,9 @@ BACKENDS = ("ducc0", "finufft")
 FRAME_ITERATIONS = 20
 # stipple.line
 LINE_ITERATIONS = 400
+# stipple.measures.plot_estimate (a common desktop plotter: mm/s pen down, mm/s pen up, seconds per lift)
+DEFAULT_SPEED = 55.0
+DEFAULT_TRAVEL_SPEED = 165.0
+DEFAULT_LIFT = 0.3
+# stipple.pipelines.pen
+ORDERS = ("path", "progressive")

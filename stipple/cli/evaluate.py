@@ -7,6 +7,7 @@ import click
 
 from ..errors import StippleError
 from ..io.commit import commit_outputs
+from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
 from .options import check_extension, check_longitude, parse_levels
 from .supervise import guarded_files
 
@@ -54,6 +55,14 @@ from .supervise import guarded_files
     default=None,
     help="Pictures: also measure Floyd-Steinberg error diffusion with about this many dots.",
 )
+@click.option("--speed", type=float, default=DEFAULT_SPEED, show_default=True, help="Drawings: pen-down mm/s.")
+@click.option(
+    "--travel-speed", type=float, default=DEFAULT_TRAVEL_SPEED, show_default=True, help="Drawings: pen-up mm/s."
+)
+@click.option("--lift", type=float, default=DEFAULT_LIFT, show_default=True, help="Drawings: seconds per pen lift.")
+@click.option(
+    "--acceleration", type=float, default=None, help="Drawings: mm/s² of every move from rest to rest (default: none)."
+)
 def evaluate(
     points_source,
     input_source,
@@ -74,10 +83,13 @@ def evaluate(
     levels,
     inset,
     fs_dots,
+    **plotter,
 ):
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
     CSVs per ink and for all dots together. Given a drawn PICTURE.png instead of POINTS: its picture measures
-    against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma)."""
+    against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma).
+    Given a DRAWING.svg (stipple's or vpype's): the plot's estimate per pen (paths, pen-down length, pen-up
+    travel, lifts, time; docs/plotters.md)."""
     from ..io.png import spectrum_plot
     from ..measures.reports import evaluation_report, format_report
     from ..pipelines.inputs import read_points
@@ -90,6 +102,9 @@ def evaluate(
         "palette": palette,
         "black": black,
     }
+    if str(points_source).lower().endswith(".svg"):
+        evaluate_plot(points_source, input_source, json_path, plotter)
+        return
     if str(points_source).lower().endswith(".png"):
         picture = {"sigmas": sigmas, "colour": colour, "levels": levels, "inset": inset, "fs_dots": fs_dots}
         evaluate_picture(points_source, input_source, json_path, picture, options, spectrum_path or bandwidth)
@@ -155,4 +170,25 @@ def evaluate_picture(picture_source, input_source, json_path, picture, options, 
                 files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
             commit_outputs(files)
     except (StippleError, ValueError) as error:
+        raise click.ClickException(str(error)) from None
+
+
+def evaluate_plot(drawing, input_source, json_path, plotter):
+    """``stipple evaluate DRAWING.svg``: the plot's estimate as text, or JSON with ``--json``."""
+    from ..io.plot_svg import read_pen_layers
+    from ..measures.plot_estimate import PlotterSettings, format_estimate, plot_estimate
+
+    try:
+        if input_source is not None:
+            raise StippleError("a drawing's plot estimate takes no INPUT")
+        check_extension("--json", json_path, ".json")
+        settings = PlotterSettings(**plotter)
+        reports = [("--json", json_path)] if json_path else []
+        with guarded_files([("drawing", drawing)], [], reports=reports):
+            estimate = plot_estimate(read_pen_layers(drawing), settings)
+            files = [("-", (format_estimate(estimate) + "\n").encode())] if json_path != "-" else []
+            if json_path is not None:
+                files.append((json_path, (json.dumps(estimate.as_dict(), indent=2) + "\n").encode()))
+            commit_outputs(files)
+    except StippleError as error:
         raise click.ClickException(str(error)) from None

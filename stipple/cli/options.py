@@ -7,7 +7,7 @@ import click
 from ..errors import StippleError
 from ..render.styles import DOT_STYLES, STYLES
 from .config import load_config
-from .defaults import BETAS, DEFAULT_SETTLE, INITS, SETTLE_WINDOW
+from .defaults import BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
 
 
 def resolve_input(ctx, given):
@@ -71,7 +71,15 @@ def output_options():
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
-        click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters)."),
+        click.option(
+            "--order",
+            type=click.Choice(ORDERS),
+            is_flag=False,
+            flag_value="path",
+            default=None,
+            help="Order the dots for a pen plotter: a bare --order (or 'path') along one short pen path; 'progressive' "
+            "(stipple torus, one ink): in passes, every prefix an even stipple of the whole image (docs/plotters.md).",
+        ),
         look_options,
     ]
 
@@ -103,14 +111,42 @@ def apply_options(function, options):
     return function
 
 
-def common_options(function=None, *, iterations=2000, settle=True):
+class CountOrAuto(click.types.IntParamType):
+    """``-M``: a whole number, or ``auto`` (the count from the pen: ``stipple.render.pen_count``)."""
+
+    name = "integer|auto"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, int) or str(value).strip().lower() == "auto":
+            return value if isinstance(value, int) else "auto"
+        try:
+            return int(value)
+        except ValueError:
+            self.fail(f"{value!r} is neither a whole number nor 'auto'", param, ctx)
+
+
+def common_options(function=None, *, iterations=2000, settle=True, auto_count=False):
     """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
     the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap;
-    ``settle=False`` leaves out ``--settle`` (for commands whose runs stop otherwise)."""
+    ``settle=False`` leaves out ``--settle`` (for commands whose runs stop otherwise); ``auto_count=True``
+    lets ``-M`` be ``auto``."""
     if function is None:
-        return lambda function: common_options(function, iterations=iterations, settle=settle)
+        return lambda function: common_options(function, iterations=iterations, settle=settle, auto_count=auto_count)
+    count_help = (
+        "Number of dots, or 'auto': from --pen-width, --dot-style and --width (docs/plotters.md)."
+        if auto_count
+        else "Number of dots."
+    )
     problem = [
-        click.option("-M", "--points", "n_points", type=int, default=30000, show_default=True, help="Number of dots."),
+        click.option(
+            "-M",
+            "--points",
+            "n_points",
+            type=CountOrAuto() if auto_count else int,
+            default=30000,
+            show_default=True,
+            help=count_help,
+        ),
         click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
         click.option(
             "--tol",

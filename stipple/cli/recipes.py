@@ -35,7 +35,7 @@ def torus_recipe(options):
             "settle": options["settle"],
         },
         draw=render_settings(options),
-        order=bool(options["order"]),
+        order=options["order"] or False,
     )
 
 
@@ -79,6 +79,8 @@ def colour_recipe(options):
 
 def check_colour_options(options):
     """Refuse the options that colour separation would ignore."""
+    if options.get("order") == "progressive":
+        raise StippleError("--order progressive is for stipple torus with one ink; use --order here")
     if options["init"] not in INITS:
         raise StippleError(
             "--init must be stratified, density or uniform for colour separation (a start CSV is for one class); "
@@ -106,14 +108,17 @@ def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers)
 
         outputs, stopped_by = supervised(options, launch)
         report_run(outputs.result, options)
-        report_travel(outputs.travel, options, recipe)
+        report_travel(outputs, options, recipe)
         write_outputs(options["outputs"], outputs.files)
     finish(outputs.result, stopped_by, options, started)
 
 
-def report_travel(travel, options, recipe):
-    """One line per ordered layer: the pen-up travel before and after ``--order`` (unless ``--quiet``)."""
+def report_travel(outputs, options, recipe):
+    """One line per ordered layer: the pen-up travel before and after ``--order``, and the passes of ``--order
+    progressive`` (unless ``--quiet``)."""
     if options["quiet"]:
         return
-    for before, after in travel:
-        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {recipe.draw['width'][1]}", err=True)
+    passes = getattr(outputs, "passes", None)
+    suffix = f" in passes of {', '.join(str(count) for count in passes)} dots" if passes else ""
+    for before, after in outputs.travel:
+        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {recipe.draw['width'][1]}{suffix}", err=True)

@@ -260,6 +260,8 @@ def plot_order(centres, points, options, unit):
     """``points`` reordered along a short pen path through ``centres`` when ``--order`` is given."""
     if not options.get("order"):
         return points
+    if options["order"] == "progressive":
+        raise StippleError("--order progressive is for stipple torus with one ink; use --order here")
     from ..render.pen import pen_order
 
     points, before, after = pen_order(points, centres)

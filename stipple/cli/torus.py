@@ -12,7 +12,7 @@ from .recipes import colour_recipe, run_pipeline, torus_recipe
 
 @click.command()
 @click.argument("image", required=False)
-@common_options
+@common_options(auto_count=True)
 @click.option(
     "--init",
     default="stratified",
@@ -54,15 +54,30 @@ def torus(ctx, image, **options):
         if options["palette"] is not None:
             from ..pipelines.colour import stipple_colour
 
+            if options["n_points"] == "auto":
+                raise StippleError("-M auto is for one ink (stipple torus without --palette)")
             return run_pipeline(stipple_colour, image, colour_recipe(options), options, [("image", image)], started)
         from ..pipelines.image import stipple_image
 
         recipe = torus_recipe(options)
         inputs = [("image", image), init_input(options["init"])]
-        hints = {"inspect": lambda weights: tone_hints(weights, options)}
+        hints = {
+            "inspect": lambda weights: tone_hints(weights, options),
+            "chosen": lambda count: report_count(count, options),
+        }
         run_pipeline(stipple_image, image, recipe, options, inputs, started, **hints)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+
+
+def report_count(count, options):
+    """``-M auto``'s choice on stderr: the count and why, a note when the darkest tones are out of reach, and the
+    numbers behind it with ``-v`` (unless ``--quiet``)."""
+    if options["quiet"]:
+        return
+    lines = [line for line in (count.reason(), count.note()) if line]
+    for line in lines + ([count.details()] if options["verbose"] else []):
+        click.echo(f"stipple: {line}", err=True)
 
 
 # Hints on stderr, never a silent change: a faint document (its gray values span less than this) and a mostly

@@ -146,8 +146,12 @@ def _coverage(dots, canvas_size, scale, pen_width):
     draw = ImageDraw.Draw(mask)
     if dots.paths is not None:
         stroke = max(int(round(pen_width * scale)), 1)
+        cap = stroke / 2
         for path in dots.paths:
             draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
+            # Round caps, as the SVG's stroke-linecap: a "point" dot inks a pen-wide disc, not a sliver.
+            for end in (path[0] * scale, path[-1] * scale):
+                draw.ellipse((end.real - cap, end.imag - cap, end.real + cap - 1, end.imag + cap - 1), fill=255)
     elif dots.squash is None:
         # Pillow's box holds the indices of the first and last pixel covered: c -+ (r - 1/2) in pixel-centre
         # coordinates, so that the disc covers about pi r^2 fine pixels (c -+ r drew it a pixel too wide); a dot

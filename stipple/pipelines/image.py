@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 from ..halftone import run
 from ..io.images import load_input
 from ..io.png import check_png_outputs
-from ..render.pen import pen_order, physical_centres
 from ..torus import torus_problem
 from .inputs import read_torus_init
 from .outputs import torus_files
+from .pen import counted_recipe, order_kind, ordered_points
 
 
 @dataclass(frozen=True)
@@ -21,37 +21,42 @@ class TorusRecipe:
     load : dict
         Keywords of ``stipple.io.images.load_input`` (invert, gamma, value_range, levels).
     problem : dict
-        Keywords of ``stipple.torus.torus_problem`` after the weights: n_points, bandwidth, backend, threads,
-        epsilon, hessian, near_field.
+        Keywords of ``stipple.torus.torus_problem`` after the weights: n_points (a number, or "auto": from the
+        pen and the paper of ``draw``, ``stipple.render.pen_count``), bandwidth, backend, threads, epsilon,
+        hessian, near_field.
     solve : dict
         Keywords of ``stipple.halftone.run`` (init as "stratified", "density" or "uniform", seed, tol, iterations,
         time_limit, safeguard, beta, correct, settle).
     draw : dict
         Keywords of ``stipple.render.flat.torus_drawing`` (width, dot_radius, png_width, background, color,
         dot_style, pen_width, style).
-    order : bool
-        Reorder the dots along a short pen path (``--order``).
+    order : bool or str
+        Reorder the dots for a pen plotter: ``True`` or "path" along one short pen path (``--order``);
+        "progressive" optimised as nested passes and drawn pass by pass (``stipple.progressive``).
     """
 
     load: dict = field(default_factory=dict)
     problem: dict = field(default_factory=dict)
     solve: dict = field(default_factory=dict)
     draw: dict = field(default_factory=dict)
-    order: bool = False
+    order: bool | str = False
 
 
 @dataclass
 class ImageOutputs:
     """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
     optimiser's ``HalftoneResult``; ``travel`` the pen-up travel
-    before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it)."""
+    before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it);
+    ``passes`` the dots per pass of ``--order progressive``; ``count`` the ``PenCount`` of ``-M auto``."""
 
     files: dict
     result: object
     travel: list = field(default_factory=list)
+    passes: list = field(default_factory=list)
+    count: object = None
 
 
-def stipple_image(image, formats, recipe, *, session=None, inspect=None, announce=None):
+def stipple_image(image, formats, recipe, *, session=None, inspect=None, announce=None, chosen=None):
     """Stipple ``image`` (a path) as ``stipple torus`` does and draw it in every format of ``formats``.
 
     Parameters
@@ -67,6 +72,8 @@ def stipple_image(image, formats, recipe, *, session=None, inspect=None, announc
     inspect, announce : callable, optional
         Observers: ``inspect(weights)`` is shown the density once it is loaded, ``announce(problem)`` the problem
         before it runs (the command line's hints and ``--verbose``).
+    chosen : callable, optional
+        Observer of ``-M auto``: ``chosen(count)`` is shown the ``PenCount`` before the run.
 
     Returns
     -------
@@ -76,24 +83,29 @@ def stipple_image(image, formats, recipe, *, session=None, inspect=None, announc
     weights = load_input(image, **recipe.load)
     if inspect is not None:
         inspect(weights)
+    recipe, count = counted_recipe(recipe, weights)
+    if count is not None and chosen is not None:
+        chosen(count)
     problem = image_problem(weights, formats, recipe)
     options = {**recipe.solve, **(session or {})}
     init = read_torus_init(options.pop("init", "stratified"), weights.shape)
     if announce is not None:
         announce(problem)
     result = run(problem, init=init, **options)
-    points, travel = result.points, []
-    if recipe.order:
-        width = recipe.draw.get("width", (200.0, "mm"))
-        points, before, after = pen_order(points, physical_centres(points, weights.shape, width))
-        travel.append((before, after))
-    return ImageOutputs(torus_files(points, weights.shape, formats, recipe.draw, weights), result, travel)
+    points, travel, passes = ordered_points(result.points, problem, weights.shape, recipe)
+    files = torus_files(points, weights.shape, formats, recipe.draw, weights)
+    return ImageOutputs(files, result, travel, passes, count)
 
 
 def image_problem(weights, formats, recipe):
     """The torus problem of the density ``weights`` with ``recipe.problem``'s settings, once the PNG canvas that
-    ``formats`` need is known to fit in memory."""
+    ``formats`` need is known to fit in memory; with ``--order progressive`` the nested levels' problem
+    (``stipple.progressive.progressive_problem``)."""
     settings = dict(recipe.problem)
     n_points = settings.pop("n_points")
     check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
+    if order_kind(recipe.order) == "progressive":
+        from ..progressive import progressive_problem
+
+        return progressive_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
     return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)

@@ -5,6 +5,7 @@ Modules: ``drawing`` (the ``Drawing`` record), ``flat`` (drawings on an image's 
 of several, one closed line), ``globe`` (sphere points on the orthographic globe or the equirectangular map),
 ``dots`` (the geometry of drawn dots: radii that keep the tone without letting neighbours touch, insets,
 foreshortened dots on the globe), ``pen`` (pen plotters: a short pen-up order and the pen paths that draw a dot),
+``pen_count`` (``-M auto``: the dot count from the pen and the paper),
 ``styles`` (the named choices, without numpy, for ``--help``). Tone-true radii are ``stipple.tone``'s. The
 public names load on first use (``stipple.lazy``).
 """

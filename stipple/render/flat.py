@@ -35,6 +35,7 @@ def layered_drawing(
     style="tone",
     coverages=None,
     target=None,
+    notes=(),
 ):
     """The ``Drawing`` of layered torus dots; ``layers`` are ``(name, colour, points)`` with points in unit
     coordinates of an image of ``shape = (H, W)``, one Inkscape layer (one pen) per ink in the SVG.
@@ -46,8 +47,10 @@ def layered_drawing(
     at 0.45 × the distance to the nearest dot of any layer, so no two dots touch, and the drawing inset by the
     largest radius (``stipple.render.dots.flat_dots``). ``dot_radius`` (physical ``(value, unit)``) fixes every
     radius. ``dot_style`` "disc" draws filled discs; "circle", "filled" and "point" pen paths ``pen_width`` wide
-    (a plotter preview in the PNG).
+    (a plotter preview in the PNG). ``notes`` (lines of text, e.g. why ``-M auto`` chose M) are added to the
+    drawing's own notes (the SVG's comments and description).
     """
+    extra_notes = list(notes)
     rows, columns = shape
     count = sum(len(points) for _, _, points in layers)
     placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
@@ -69,7 +72,7 @@ def layered_drawing(
         background=background,
         pen_width=pen,
         blend=blend,
-        notes=tuple(notes),
+        notes=(*notes, *extra_notes),
     )
 
 

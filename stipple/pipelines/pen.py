@@ -1,0 +1,59 @@
+"""The pen plotter's part of one image's pipeline (``stipple.pipelines.image``): ``-M auto``, the dot count from
+the pen and the paper (``stipple.render.pen_count``), and the plotting order: one short pen path (``--order``)
+or nested passes (``--order progressive``, ``stipple.progressive``)."""
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..io.units import UNITS
+from ..render.pen import pen_order, physical_centres
+from ..render.pen_count import auto_count
+
+ORDERS = ("path", "progressive")
+
+
+def order_kind(order):
+    """The recipe's ``order`` as None, "path" or "progressive" (``True`` is "path", as a bare ``--order``)."""
+    if not order:
+        return None
+    if order is True or order == "path":
+        return "path"
+    if order == "progressive":
+        return order
+    raise ValueError(f"order must be one of {', '.join(ORDERS)}, not {order!r}")
+
+
+def counted_recipe(recipe, weights):
+    """``(recipe, count)``: with ``n_points`` "auto", the recipe with M chosen from the pen (``count``, a
+    ``stipple.render.pen_count.PenCount``, whose reason and note go to the SVG's notes as data); else
+    ``(recipe, None)``."""
+    if recipe.problem.get("n_points") != "auto":
+        return recipe, None
+    draw = recipe.draw
+    millimetres = [value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"])]
+    count = auto_count(weights, millimetres[0], draw["dot_style"], millimetres[1])
+    lines = [line for line in (count.reason(), count.note()) if line]
+    recipe = replace(
+        recipe,
+        problem={**recipe.problem, "n_points": count.n_points},
+        draw={**draw, "notes": (*draw.get("notes", ()), *lines)},
+    )
+    return recipe, count
+
+
+def ordered_points(points, problem, shape, recipe):
+    """``(points, travel, passes)``: ``points`` in plotting order (as they are without ``recipe.order``), the
+    pen-up travel before and after in the unit of the drawing's width, and the dots per pass (progressive)."""
+    kind = order_kind(recipe.order)
+    if kind is None:
+        return points, [], []
+    centres = physical_centres(points, shape, recipe.draw.get("width", (200.0, "mm")))
+    if kind == "path":
+        points, before, after = pen_order(points, centres)
+        return points, [(before, after)], []
+    from ..progressive import progressive_order
+
+    counts = [int(count) for count in np.diff([0] + [part.stop for part in problem.slices])]
+    order, before, after = progressive_order(centres, counts)
+    return points[order], [(before, after)], counts

@@ -1,0 +1,133 @@
+"""``-M auto``: the number of dots that a pen of a given width draws the image's ink with on a given paper.
+
+A pen dot inks a fixed area ``a``: for the "point" style one pen touch, a disc of the pen's diameter ``w`` swept
+along the point's stroke of ``w / 10`` (``a = (pi / 4 + 1 / 10) w^2``); for "filled" and "circle" the smallest
+dot of the style, a pen circle of radius ``w / 2`` (pen centre), which inks a disc of radius ``w`` (``a = pi
+w^2``; the plotter style's tone radius is then exactly ``w``). M dots carry the image's ink when ``M a`` is its
+total darkness times the paper's area: ``M_tone = mean(w) A / a``.
+
+The plotter style never lets two dots touch: a filled or circle dot's radius is at most ``TOUCH_FRACTION`` of
+its distance to its nearest neighbour, and a point dot's reach ``r = w / 2`` fits while that distance is at least
+``r / TOUCH_FRACTION``. Packed hexagonally at that limit, dots cover ``a 2 f^2 / (sqrt(3) r^2)`` of the paper
+(0.83 for points, 0.73 for filled and circle dots). An optimised stipple is not a lattice: its nearest
+neighbours are closer than the hexagonal spacing (5 % of them closer than ``NEIGHBOUR_RATIO`` of it), and the
+filled and circle dots there shrink, so their tones saturate earlier: at ``0.73 NEIGHBOUR_RATIO^2 = 0.49``
+(measured on flat grays: drawn 0.50 for 0.5, 0.44 to 0.57 beyond; point dots, never shrunk, drew 0.41, 0.51,
+0.62, 0.72, 0.81 for 0.4 to 0.8). That coverage ``c_max`` is the darkest tone the pen draws, and at most
+``M_pack = c_max A / a`` dots fit on the paper. ``M = min(M_tone, M_pack)``; tones darker than ``c_max`` come out
+lighter, and an image darker than that on average gets ``M_pack``.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import StippleError
+from ..halftone import MAX_POINTS
+from .dots import TOUCH_FRACTION
+
+PEN_STYLES = ("point", "filled", "circle")
+# The 5th percentile of nearest-neighbour distance / hexagonal spacing of an optimised stipple (0.822 for 2264
+# dots of the cameraman).
+NEIGHBOUR_RATIO = 0.82
+DARKEST_PERCENTILE = 99.0
+
+
+@dataclass
+class PenCount:
+    """The chosen M and why: areas in mm², ``darkest`` the image's 99th-percentile darkness, ``reachable`` the
+    darkest tone the style's no-touch packing draws."""
+
+    n_points: int
+    tone_points: int
+    packing_points: int
+    dot_area: float
+    ink_area: float
+    paper_area: float
+    reachable: float
+    darkest: float
+
+    @property
+    def capped(self):
+        return self.n_points < self.tone_points
+
+    def reason(self):
+        """One line: the chosen M and why."""
+        if self.capped:
+            why = f"the most that fit without touching ({self.tone_points} would carry the ink)"
+        else:
+            why = f"{self.ink_area:.4g} mm² of ink / {self.dot_area:.4g} mm² per pen dot"
+        return f"-M auto: {self.n_points} dots, {why}"
+
+    def note(self):
+        """A line when the image's darkest tones are beyond the packing's reach, else None."""
+        if self.darkest <= self.reachable:
+            return None
+        return (
+            f"tones darker than {self.reachable:.0%} will be lighter: the pen's dots cannot pack closer without "
+            f"touching (the image's darkest 1 % is {self.darkest:.0%} dark)"
+        )
+
+    def details(self):
+        """The numbers behind the choice (for ``-v``)."""
+        return (
+            f"paper {self.paper_area:.6g} mm², ink {self.ink_area:.6g} mm², pen dot {self.dot_area:.4g} mm², "
+            f"tone count {self.tone_points}, packing count {self.packing_points}, darkest reachable tone "
+            f"{self.reachable:.3f}"
+        )
+
+
+def pen_dot(style, pen_width):
+    """``(area, reach)`` in mm² and mm of one pen dot of ``style`` drawn with a pen ``pen_width`` mm wide."""
+    if style == "point":
+        return (np.pi / 4 + 0.1) * pen_width**2, pen_width / 2
+    if style in ("filled", "circle"):
+        return np.pi * pen_width**2, pen_width
+    raise StippleError(f"-M auto needs a pen dot style ({', '.join(PEN_STYLES)}), not --dot-style {style}")
+
+
+def reachable_tone(style, pen_width=1.0):
+    """The darkest coverage of the style's dots under the plotter style's no-touch rule (module docstring)."""
+    area, reach = pen_dot(style, pen_width)
+    spacing = reach / TOUCH_FRACTION
+    hexagonal = area * 2 / (np.sqrt(3) * spacing**2)
+    return hexagonal if style == "point" else hexagonal * NEIGHBOUR_RATIO**2
+
+
+def auto_count(darkness, paper_width, style, pen_width):
+    """The ``PenCount`` of a density ``darkness`` (H, W) in [0, 1] drawn ``paper_width`` mm wide.
+
+    Raises
+    ------
+    StippleError
+        For a disc style, an image without ink, or a count beyond ``MAX_POINTS``.
+    """
+    darkness = np.asarray(darkness, dtype=np.float64)
+    rows, columns = darkness.shape
+    area, _ = pen_dot(style, pen_width)
+    paper = paper_width * paper_width * rows / columns
+    ink = float(darkness.mean()) * paper
+    reachable = reachable_tone(style, pen_width)
+    tone_points = int(round(ink / area))
+    packing_points = int(np.floor(reachable * paper / area))
+    count = min(tone_points, packing_points)
+    if count < 1:
+        raise StippleError(
+            f"-M auto: the image's ink ({ink:.3g} mm²) is less than one pen dot ({area:.3g} mm²); give -M"
+        )
+    if count > MAX_POINTS:
+        raise StippleError(
+            f"-M auto: {count} dots of a {pen_width:g} mm pen on this paper is more than {MAX_POINTS}; use a "
+            "wider pen, a smaller --width or give -M"
+        )
+    darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
+    return PenCount(count, tone_points, packing_points, area, ink, paper, float(reachable), darkest)
+
+
+def ink_darkness(image, separation="gray", black=1.0):
+    """The total ink density (H, W) of an image file over its inks (``stipple.colour.separate``): what
+    ``auto_count`` counts dots for when every ink is drawn with the same pen."""
+    from ..colour import separate
+    from ..io.images import load_colour
+
+    return np.clip(sum(layer.density for layer in separate(load_colour(image), separation, black)), 0.0, 1.0)

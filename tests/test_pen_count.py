@@ -1,0 +1,119 @@
+"""``-M auto``: the pen dot's ink against the drawn preview, the count on constant images by hand, the cap, and
+the command line's messages and metadata."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from stipple.cli import main
+from stipple.io.png import render_picture
+from stipple.render.dots import Dots
+from stipple.render.pen import dot_paths
+from stipple.render.pen_count import auto_count, pen_dot, reachable_tone
+
+
+@pytest.mark.parametrize("style", ["point", "filled", "circle"])
+def test_pen_dot_area_is_what_the_preview_inks(style):
+    pen = 10.0
+    area, reach = pen_dot(style, pen)
+    dots = Dots("d", (0.0, 0.0, 0.0), np.array([[50.0, 50.0]]), np.array([reach]))
+    dots.paths = dot_paths(dots.centres, dots.radii, style, pen)
+    picture = np.asarray(render_picture([dots], (100, 100), 400, pen_width=pen), dtype=np.float64)
+    inked = (1 - picture / 255).sum() / 16  # 4 pixels per user unit
+    assert inked == pytest.approx(area, rel=0.015)
+
+
+def test_count_carries_the_ink_of_a_constant_image():
+    darkness = np.full((30, 60), 0.3)
+    count = auto_count(darkness, 120.0, "point", 0.4)  # paper 120 x 60 mm
+    area = (np.pi / 4 + 0.1) * 0.16
+    assert count.paper_area == pytest.approx(7200.0)
+    assert count.ink_area == pytest.approx(0.3 * 7200.0)
+    assert count.n_points == count.tone_points == round(0.3 * 7200 / area)
+    assert not count.capped and count.note() is None
+    assert "ink" in count.reason() and str(count.n_points) in count.reason()
+
+
+def test_count_scales_with_the_pen_and_the_paper():
+    darkness = np.full((20, 20), 0.25)
+    base = auto_count(darkness, 50.0, "filled", 0.3).n_points
+    assert auto_count(darkness, 100.0, "filled", 0.3).n_points == pytest.approx(4 * base, rel=1e-3)
+    assert auto_count(darkness, 50.0, "filled", 0.6).n_points == pytest.approx(base / 4, rel=1e-2)
+
+
+@pytest.mark.parametrize("style", ["point", "filled"])
+def test_dark_image_gets_the_largest_packing_and_a_note(style):
+    darkness = np.full((10, 10), 0.95)
+    count = auto_count(darkness, 20.0, style, 0.8)
+    area, reach = pen_dot(style, 0.8)
+    hexagonal_sites = 400 * 2 / (np.sqrt(3) * (reach / 0.45) ** 2)  # dots of reach r, 0.45 d apart, on 400 mm²
+    assert count.capped and count.n_points == int(np.floor(reachable_tone(style) * 400 / area))
+    if style == "point":
+        assert count.n_points == int(np.floor(hexagonal_sites))
+    assert count.n_points < count.tone_points
+    assert "lighter" in count.note() and "without touching" in count.reason()
+
+
+@pytest.mark.parametrize(
+    "darkness, style, message",
+    [(np.zeros((4, 4)), "point", "less than one pen dot"), (np.ones((4, 4)), "disc", "pen dot style")],
+)
+def test_refusals(darkness, style, message):
+    with pytest.raises(Exception, match=message):
+        auto_count(darkness, 10.0, style, 0.3)
+
+
+def flat_gray(tmp_path, darkness, size=48):
+    path = tmp_path / "gray.png"
+    Image.fromarray(np.full((size, size), round(255 * (1 - darkness)), np.uint8)).save(path)
+    return path
+
+
+def test_auto_on_the_command_line(tmp_path):
+    image = flat_gray(tmp_path, 0.3)
+    svg, png = tmp_path / "out.svg", tmp_path / "out.png"
+    arguments = ["torus", str(image), "-M", "auto", "--dot-style", "point", "--pen-width", "0.5mm", "--width", "24mm"]
+    result = CliRunner().invoke(main, [*arguments, "-o", str(svg), "-o", str(png), "--png-width", "768", "-v"])
+    assert result.exit_code == 0, result.output
+    expected = auto_count(np.full((48, 48), 1 - round(255 * 0.7) / 255), 24.0, "point", 0.5)
+    assert f"-M auto: {expected.n_points} dots" in result.output and "packing count" in result.output
+    text = svg.read_text()
+    assert text.count("<path") == expected.n_points and f"-M auto: {expected.n_points} dots" in text
+    drawn = 1 - np.asarray(Image.open(png), dtype=np.float64) / 255
+    assert drawn[96:-96, 96:-96].mean() == pytest.approx(0.3, abs=0.04)  # the pen dots carry the tone
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ([], "pen dot style"),
+        (["--dot-style", "point", "--palette", "cmyk"], "one ink"),
+        (["--dot-style", "point", "-M", "many"], "neither a whole number nor 'auto'"),
+    ],
+)
+def test_auto_refusals_on_the_command_line(tmp_path, extra, message):
+    image = flat_gray(tmp_path, 0.3, size=16)
+    result = CliRunner().invoke(main, ["torus", str(image), "-M", "auto", *extra, "-o", str(tmp_path / "o.svg")])
+    assert result.exit_code != 0 and message in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "o.svg").exists()
+
+
+def test_batch_refuses_auto(tmp_path):
+    image = flat_gray(tmp_path, 0.3, size=16)
+    result = CliRunner().invoke(main, ["batch", str(image), "-d", str(tmp_path / "out"), "-M", "auto"])
+    assert result.exit_code != 0 and "-M auto" in result.output and "Traceback" not in result.output
+
+
+def test_vpype_plugin_auto_count(tmp_path):
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    image = flat_gray(tmp_path, 0.3, size=32)
+    document = vpype_cli.execute(
+        f"stipple -M auto --dot-style point --pen-width 0.5mm --width 20mm --iterations 5 --order path {image}"
+    )
+    expected = auto_count(np.full((32, 32), 1 - round(255 * 0.7) / 255), 20.0, "point", 0.5).n_points
+    assert sum(len(layer) for layer in document.layers.values()) == expected
+    with pytest.raises(Exception, match="whole number or 'auto'"):
+        vpype_cli.execute(f"stipple -M lots {image}")

@@ -1,0 +1,165 @@
+"""``--order progressive``: nested levels, each its own term; passes drawn one after another."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import gradient_taylor_slope
+from PIL import Image
+
+from stipple.cli import main
+from stipple.halftone import run
+from stipple.measures.evaluate import discrepancy_energy
+from stipple.progressive import (
+    LEVEL_POWER,
+    interleave,
+    pass_counts,
+    pass_offsets,
+    progressive_order,
+    progressive_problem,
+)
+from stipple.torus import default_bandwidth, torus_problem
+
+
+@pytest.mark.parametrize("levels", [1, 2, 3, 4, 5, 8])
+def test_passes_are_a_bit_reversed_deal(levels):
+    offsets = pass_offsets(levels)
+    assert sorted(offsets) == list(range(levels)) and offsets[0] == 0
+    dealt = interleave(np.arange(37), levels)
+    assert sorted(dealt) == list(range(37))
+    counts = pass_counts(37, levels)
+    assert sum(counts) == 37 and max(counts) - min(counts) <= 1
+    ends = np.cumsum(counts)
+    for offset, start, end in zip(offsets, ends - counts, ends, strict=True):
+        assert list(dealt[start:end]) == list(range(offset, 37, levels))
+
+
+def test_first_half_of_four_passes_is_every_other_dot():
+    dealt = interleave(np.arange(40), 4)
+    assert sorted(dealt[:20]) == list(range(0, 40, 2))
+
+
+def density():
+    y, x = np.mgrid[0:16, 0:20] / 16
+    return 0.2 + 0.8 * np.exp(-((x - 0.6) ** 2 + (y - 0.4) ** 2) * 4)
+
+
+def test_objective_is_the_weighted_sum_of_the_levels(rng):
+    weights = density()
+    problem = progressive_problem(weights, 48, threads=1)
+    points = problem.manifold.random(rng, 48)
+    problem.objective.set_points(points)
+    ends = [12, 24, 36, 48]
+    expected = 0.0
+    for end in ends:
+        level = torus_problem(weights, end, default_bandwidth(end, weights), threads=1)
+        level.objective.set_points(points[:end])
+        expected += (end / 48) ** LEVEL_POWER * level.objective.energy()
+    assert problem.objective.energy() == pytest.approx(expected, rel=1e-12)
+    assert problem.settings["level_points"] == ends
+
+
+def test_gradient_taylor_slope(rng):
+    problem = progressive_problem(density(), 40, threads=1)
+    points = problem.manifold.random(rng, 40)
+    slope = gradient_taylor_slope(problem.objective, points, rng.standard_normal(points.shape), [1e-3, 5e-4])
+    assert slope == pytest.approx(2, abs=0.1)
+
+
+def test_every_level_is_a_good_stipple(rng):
+    weights = density()
+    count = 400
+    nested = run(progressive_problem(weights, count, threads=1), seed=1, iterations=300).points
+    plain = run(torus_problem(weights, count, threads=1), seed=1, iterations=300).points
+    shuffled = plain[rng.permutation(count)]
+    for end in (100, 200, 400):
+        level = torus_problem(weights, end, threads=1)
+        alone = run(level, seed=2, iterations=300).points
+        ours = discrepancy_energy(level, nested[:end])
+        assert ours <= 1.6 * discrepancy_energy(level, alone)
+        if end < count:
+            assert ours < 0.5 * discrepancy_energy(level, shuffled[:end])
+
+
+def test_passes_are_drawn_one_after_another(rng):
+    centres = rng.random((90, 2)) * 100
+    counts = [23, 22, 23, 22]
+    order, before, after = progressive_order(centres, counts)
+    assert sorted(order) == list(range(90))
+    ends = np.cumsum(counts)
+    for start, end in zip(ends - counts, ends, strict=True):
+        assert sorted(order[start:end]) == list(range(start, end))
+    assert after < before
+
+
+def gray(tmp_path):
+    path = tmp_path / "g.png"
+    Image.fromarray((255 * (1 - density())).astype(np.uint8)).save(path)
+    return path
+
+
+def test_progressive_on_the_command_line(tmp_path):
+    csv = tmp_path / "dots.csv"
+    arguments = ["torus", str(gray(tmp_path)), "-M", "200", "--order", "progressive", "--iterations", "30"]
+    result = CliRunner().invoke(main, [*arguments, "-o", str(csv)])
+    assert result.exit_code == 0, result.output
+    assert "in passes of 50, 50, 50, 50 dots" in result.output
+    assert len(csv.read_text().splitlines()) == 201
+
+
+def test_bare_order_is_one_path(tmp_path):
+    result = CliRunner().invoke(
+        main, ["torus", str(gray(tmp_path)), "-M", "100", "--iterations", "5", "--order", "-o", str(tmp_path / "d.csv")]
+    )
+    assert result.exit_code == 0, result.output
+    assert "pen-up travel" in result.output and "passes" not in result.output
+
+
+@pytest.mark.parametrize("command", [["sphere", "builtin:gaussians"], ["colour", "IMAGE"], ["batch", "IMAGE"]])
+def test_progressive_elsewhere_is_refused(tmp_path, command):
+    command = [str(gray(tmp_path)) if part == "IMAGE" else part for part in command]
+    extra = ["-d", str(tmp_path / "out")] if command[0] == "batch" else ["-o", str(tmp_path / "o.csv")]
+    result = CliRunner().invoke(main, [*command, "-M", "50", "--iterations", "2", "--order", "progressive", *extra])
+    assert result.exit_code != 0 and "progressive" in result.output and "Traceback" not in result.output
+
+
+def test_vpype_plugin_progressive_keeps_one_layer_per_pen(tmp_path):
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    from stipple.render.pen import path_length
+
+    image = gray(tmp_path)
+    document = vpype_cli.execute(
+        f"stipple -M 200 --iterations 40 --dot-style point --width 100mm --order progressive {image}"
+    )
+    (layer,) = document.layers.values()
+    assert layer.property(vpype.METADATA_FIELD_NAME) == "black" and len(layer) == 200
+    centres = np.array([path[0] for path in layer])
+    # Pass by pass: each quarter alone is spread over the page (its dots' bounding box covers most of it) ...
+    for start in range(0, 200, 50):
+        part = centres[start : start + 50]
+        assert np.ptp(part.real) > 0.7 * np.ptp(centres.real) and np.ptp(part.imag) > 0.7 * np.ptp(centres.imag)
+    # ... and drawn along a short path: shorter than the passes' dots in a random order.
+    rng = np.random.default_rng(0)
+    shuffled = np.concatenate([rng.permutation(centres[start : start + 50]) for start in range(0, 200, 50)])
+    pairs = np.stack([centres.real, centres.imag], axis=1)
+    random_pairs = np.stack([shuffled.real, shuffled.imag], axis=1)
+    assert path_length(pairs) < 0.5 * path_length(random_pairs)
+    path = vpype_cli.execute(f"stipple -M 200 --iterations 40 --dot-style point --width 100mm --order path {image}")
+    assert len(next(iter(path.layers.values()))) == 200
+
+
+def test_vpype_plugin_progressive_refuses_several_inks(tmp_path):
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    rgb = tmp_path / "rgb.png"
+    Image.fromarray(np.random.default_rng(1).integers(0, 255, (8, 8, 3), dtype=np.uint8)).save(rgb)
+    with pytest.raises(Exception, match="one ink"):
+        vpype_cli.execute(f"stipple -M 50 --iterations 2 --separation cmyk --order progressive {rgb}")
+
+
+def test_low_frequency_correction_runs_on_the_full_set():
+    problem = progressive_problem(density(), 48, threads=1)
+    coarse = problem.coarse(8)
+    assert coarse.n_points == 48 and coarse.bandwidth == 8 and problem.settle > 0
