@@ -171,7 +171,10 @@ def multiclass_problem(
         raise StippleError(f"term weights must be finite, non-negative and not all zero, not {term_weights}")
     counts = class_counts([weights.sum() for weights in densities], n_points)
     kept = [index for index, count in enumerate(counts) if count > 0]
+    # The flat metric and the full default bandwidth: the classes' run stops by ``tol``, whose meaning the
+    # density-scaled metric would change, and neither was measured on colour (docs/performance.md).
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
+    options.update(precondition=False, bandwidth_factor=1.0)
     union = torus_problem(sum(densities), n_points, bandwidth, **options)
     classes = []
     for index in kept:
