@@ -68,13 +68,24 @@ class ScaledTorus(Torus):
         self.field = np.asarray(field, dtype=float)
         if self.field.ndim != 2 or not np.all(np.isfinite(self.field)) or not np.all(self.field > 0):
             raise ValueError("field must be a 2-D array of positive numbers")
+        self._flat = self.field.ravel()
+        self._cached = None
 
     def factor(self, points):
-        """``f`` at each point (the value of the cell that contains it)."""
+        """``f`` at each point (the value of the cell that contains it); kept for the last ``points`` array,
+        which CG asks about several times per iteration (read-only)."""
+        if self._cached is not None and self._cached[0] is points:
+            return self._cached[1]
         rows, columns = self.field.shape
-        column = np.minimum((np.mod(points[:, 0], 1.0) * columns).astype(np.intp), columns - 1)
-        row = np.minimum((np.mod(points[:, 1], 1.0) * rows).astype(np.intp), rows - 1)
-        return self.field[row, column]
+        x, y = points[:, 0], points[:, 1]
+        if x.min(initial=0.0) < 0 or max(x.max(initial=0.0), y.max(initial=0.0)) >= 1 or y.min(initial=0.0) < 0:
+            x, y = np.mod(x, 1.0), np.mod(y, 1.0)
+        cells = np.minimum((y * rows).astype(np.intp), rows - 1) * columns
+        cells += np.minimum((x * columns).astype(np.intp), columns - 1)
+        values = self._flat[cells]
+        values.flags.writeable = False
+        self._cached = (points, values)
+        return values
 
     def inner(self, points, u, v):
         return float(np.einsum("i,ij,ij->j", self.factor(points), u, v) @ self._metric)

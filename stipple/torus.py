@@ -7,6 +7,7 @@ import numpy as np
 from .errors import StippleError
 from .halftone import (
     DEFAULT_SETTLE,
+    FLAT_SETTLE,
     MAX_BANDWIDTH,
     Problem,
     check_bandwidth,
@@ -219,7 +220,7 @@ def torus_problem(
         bandwidth=bandwidth,
         sample=lambda rng, count: sample_image(weights, rng, count),
         stratified=lambda rng, count: stratified_sample(weights, rng, count),
-        settle=DEFAULT_SETTLE,
+        settle=DEFAULT_SETTLE if precondition else FLAT_SETTLE,
         correction_bandwidth=min(correction_bandwidth, MAX_BANDWIDTH),
         coarse=lambda coarse_bandwidth: torus_problem(
             weights, n_points, coarse_bandwidth, backend=backend, threads=threads, epsilon=epsilon, near_field=False
