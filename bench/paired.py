@@ -87,7 +87,7 @@ def cases(inputs):
             ("png", "csv"),
             [],
         ),
-        "sphere": (["sphere", topo, "-M", "200000"], topo, ("csv",), ["--range", "0", "1"]),
+        "sphere": (["sphere", topo, "-M", "200000"], topo, ("csv",), []),
         "million": (["torus", str(inputs / "cat1024.png"), "-M", "1000000"], inputs / "cat1024.png", ("csv",), []),
     }
 
