@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: install demo test bench lint clean
+.PHONY: install demo test bench bench-paired lint clean
 
 install: $(STAMP)
 
@@ -27,6 +27,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/run.py --output bench/results.json
+
+# Whole commands against another version, e.g. make bench-paired OLD=../base/.venv/bin/stipple (docs/performance.md)
+bench-paired: $(STAMP)
+	$(BIN)/python bench/paired.py --old "$(OLD)" --output bench/paired.json
 
 lint: $(STAMP)
 	$(BIN)/ruff check stipple tests bench

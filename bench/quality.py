@@ -165,7 +165,7 @@ def evaluate(domain, input_path, points_path, count):
 
         weights = load_density(str(input_path))
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
-        problem = torus_problem(weights, len(unit), None, epsilon=1e-10)
+        problem = torus_problem(weights, len(unit), None, epsilon=1e-10, bandwidth_factor=1.0)
         return evaluate_torus(problem, unit, weights), unit, weights
     from stipple.sphere import CellMap, sphere_problem
 

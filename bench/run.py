@@ -7,12 +7,16 @@ same run), their ratio, transform counts per iteration, the process's peak memor
 Each near-field case is run beside the same problem without it. Quote medians; compare ratios within one run.
 Scale cases (``bench/scale.py``, one process each, with its own peak memory): the torus with M = 10^6 on a
 1024² image (default N), and spherical designs of strength 200 (default M) and 1000 (M = 1,002,000) timed to
-their target (largest error 1e-10). Video cases (``bench/video.py``): seconds per warm-started frame against a
+their target (largest error 1e-10). Paired cases (``bench/paired.py``, with ``--old CMD`` or ``$STIPPLE_OLD``: the
+whole commands of another version, e.g. the checkout before the coarse-to-fine start, alternated with this one's,
+with both outputs' quality; skipped without an old version, so that a fresh clone runs the rest). Video cases
+(``bench/video.py``): seconds per warm-started frame against a
 cold single-image run, the still dots' moves and each frame's E_N against its cold run's, at M = 2000 and 20000.
 """
 
 import argparse
 import json
+import os
 import platform
 import resource
 import subprocess
@@ -163,6 +167,11 @@ def main(argv=None):
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--threads", type=int, default=default_threads())
     parser.add_argument("--quick", action="store_true", help="small cases only (smoke test)")
+    parser.add_argument(
+        "--old", default=os.environ.get("STIPPLE_OLD"), help="another version's stipple command: paired cases"
+    )
+    parser.add_argument("--paired-cases", default="portrait,dark,panorama,colour,sphere,million")
+    parser.add_argument("--paired-repeats", type=int, default=2)
     args = parser.parse_args(argv)
     reuse_freed_memory()  # as the command line does
     portrait = load_density("samples/astronaut256.png")
@@ -193,6 +202,13 @@ def main(argv=None):
         for name, clip in clips(count, 6 if args.quick else 24, real=False):
             record({"video": True, **video_case(clip, count, args.threads, name)})
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}
+    if args.old:
+        from paired import main as paired_main  # bench/paired.py, beside this script
+
+        report["paired"] = paired_main(
+            ["--old", args.old, "--cases", "smoke" if args.quick else args.paired_cases]
+            + ["--repeats", str(args.paired_repeats), "--output", str(Path(args.output).with_name("paired.json"))]
+        )
     with open(args.output, "w") as stream:
         json.dump(report, stream, indent=2)
         stream.write("\n")

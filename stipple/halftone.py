@@ -10,6 +10,7 @@ import numpy as np
 from . import allocator
 from .checks import check_integer, check_positive
 from .errors import StippleError
+from .multilevel import coarse_to_fine
 from .optimize import BETAS, OptimizeResult, initial_state, minimize
 
 MAX_POINTS = 20_000_000
@@ -19,8 +20,15 @@ INITS = ("stratified", "density", "uniform")
 # E_N at bandwidth N / factor; under a time limit at most COARSE_TIME_SHARE of it in all (README, Defaults).
 COARSE_LEVELS = ((6, 5), (12, 20))
 COARSE_TIME_SHARE = 0.04
+# Under a time limit, the coarse-to-fine start takes at most this share of it.
+LEVELS_TIME_SHARE = 0.25
 # Default ``settle``: stop when 20 iterations gain less than this fraction of the energy (README, Defaults).
-DEFAULT_SETTLE = 1.5e-3
+DEFAULT_SETTLE = 1.2e-3
+# ... and the previous version's, for the flat metric from the stratified start (``precondition=False``): the
+# density-scaled metric gains more per iteration at the same quality, so the same fraction stops it earlier than
+# the p01 of the flat run's stop (the portrait: 133 iterations and p01 0.7375 at 1.5e-3, 146 and 0.7431 at
+# 1.2e-3, against 166 and 0.7398 with the flat metric).
+FLAT_SETTLE = 1.5e-3
 
 
 @dataclass
@@ -32,7 +40,10 @@ class Problem:
     ``stratified(rng, count)``, where the domain has one, points stratified over it; ``settings`` are the values
     that define the problem (compared when a checkpoint is resumed). ``coarse(bandwidth)``, where the domain has
     one, is the same density's plain ``E_N`` problem at a lower bandwidth, for the final low-frequency correction;
-    ``settle`` the default of ``run``'s ``settle`` for it (0: never).
+    ``settle`` the default of ``run``'s ``settle`` for it (0: never). ``level(count)`` and ``split(points,
+    count)``, where the domain has them, are the same problem with ``count`` dots and the transfer of a level's
+    points to ``count`` dots, for the coarse-to-fine start (``stipple.multilevel``). ``correction_bandwidth``
+    (default: ``bandwidth``) is the N that the correction's levels divide.
     """
 
     domain: str
@@ -46,6 +57,9 @@ class Problem:
     stratified: object = None
     coarse: object = None
     settle: float = 0.0
+    level: object = None
+    split: object = None
+    correction_bandwidth: int = 0
 
 
 @dataclass
@@ -154,6 +168,7 @@ def run(
     checkpoint_iterations=None,
     resume=False,
     correct=True,
+    levels=True,
 ):
     """Optimise ``problem`` from ``init``, or resume it from a checkpoint, and collect the result.
 
@@ -182,6 +197,10 @@ def run(
         Finish with the low-frequency correction (``correct_low_frequencies``) where the problem has a ``coarse``
         version, unless the run made no iteration or was stopped by ``callback``. Under a ``time_limit`` the main
         run leaves ``COARSE_TIME_SHARE`` of it to the correction.
+    levels : bool
+        With the stratified start, start instead from the coarse-to-fine solution (``stipple.multilevel``)
+        where the problem has levels: fewer dots solved first at a lower bandwidth, then split. Under a
+        ``time_limit`` it takes at most ``LEVELS_TIME_SHARE`` of it; ``callback`` sees its levels' states.
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
@@ -200,26 +219,35 @@ def run(
         saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)
     elif resume:
         raise StippleError("resume needs a checkpoint file")
+    started = time.perf_counter()
     if resume:
         state = load_checkpoint(checkpoint, problem)
     else:
         rng = np.random.default_rng(seed)
-        start = initial_points(problem, init, rng)
+        stratified = isinstance(init, str) and init == "stratified" and problem.stratified is not None
+        if stratified and levels and problem.level is not None:
+            share = None if time_limit is None else time_limit * LEVELS_TIME_SHARE
+            start = coarse_to_fine(problem, rng, time_limit=share, callback=callback)
+        else:
+            start = initial_points(problem, init, rng)
         reference = None
-        if isinstance(init, str) and init == "stratified" and problem.stratified is not None:
+        if stratified:
             reference = gradient_norm(problem, problem.sample(rng, problem.n_points))
         state = initial_state(problem.objective, problem.manifold, start)
         state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
         state.rng_state = json.dumps(rng.bit_generator.state)
-    corrects = correct and problem.coarse is not None and problem.bandwidth >= 4 * max(COARSE_LEVELS)[0]
-    started = time.perf_counter()
+    corrects = correct and problem.coarse is not None and _correction_bandwidth(problem) >= 4 * max(COARSE_LEVELS)[0]
+    main_limit = None
+    if time_limit is not None:
+        share = 1 - COARSE_TIME_SHARE if corrects else 1.0
+        main_limit = max(time_limit * share - (time.perf_counter() - started), 0.0)
     outcome = minimize(
         problem.objective,
         problem.manifold,
         state=state,
         tol=tol,
         max_iterations=iterations,
-        time_limit=time_limit if time_limit is None or not corrects else time_limit * (1 - COARSE_TIME_SHARE),
+        time_limit=main_limit,
         restart_every=restart_every,
         safeguard=safeguard,
         beta=beta,
@@ -239,7 +267,7 @@ def run(
 
 def correct_low_frequencies(problem, result, time_limit=None, callback=None, levels=COARSE_LEVELS):
     """Move ``result.points`` by CG on the plain ``E_N`` of ``problem.coarse`` at ``N / factor``, for each
-    ``(factor, iterations)`` of ``levels`` in turn.
+    ``(factor, iterations)`` of ``levels`` in turn (``N``: ``problem.correction_bandwidth`` if set).
 
     A coarse problem's gradient is a smooth field, so its steps are smooth deformations of the point set that fix
     the frequencies below ``N / (2 factor)``, which every iteration of the main run stirs up again, and leave the
@@ -251,7 +279,7 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
     started = time.perf_counter()
     points, corrections, summary = result.points, [], []
     for factor, iterations in levels:
-        coarse = problem.coarse(even_at_least_2(problem.bandwidth / factor))
+        coarse = problem.coarse(even_at_least_2(_correction_bandwidth(problem) / factor))
         remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
         correction = minimize(
             coarse.objective,
@@ -279,6 +307,10 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
         message=f"{result.message}; low-frequency correction: {', '.join(summary)} iterations",
         corrections=tuple(corrections),
     )
+
+
+def _correction_bandwidth(problem):
+    return problem.correction_bandwidth or problem.bandwidth
 
 
 def even_at_least_2(value):

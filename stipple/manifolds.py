@@ -47,6 +47,53 @@ class Torus:
         return rng.random((count, 2))
 
 
+class ScaledTorus(Torus):
+    """The torus with the metric scaled at every point by a factor read from a field over the image's cells.
+
+    ``<u, v> = sum_i f(p_i) sum_j scale_j^2 u_ij v_ij``: CG in this metric is CG preconditioned by ``1 / f(p_i)``
+    per dot (a Jacobi preconditioner). On the torus ``f`` is the local stiffness of the dots' arrangement, which
+    grows with the density (``stipple.torus.stiffness_field``): in the Euclidean metric the one Newton step of an
+    iteration is sized for the densest region, and dots in light regions settle many times more slowly.
+
+    Parameters
+    ----------
+    scale : array_like
+        As for ``Torus``.
+    field : array_like, shape (H, W)
+        Positive factors per cell, row 0 at the top (y down), like the image.
+    """
+
+    def __init__(self, scale, field):
+        super().__init__(scale)
+        self.field = np.asarray(field, dtype=float)
+        if self.field.ndim != 2 or not np.all(np.isfinite(self.field)) or not np.all(self.field > 0):
+            raise ValueError("field must be a 2-D array of positive numbers")
+        self._flat = self.field.ravel()
+        self._cached = None
+
+    def factor(self, points):
+        """``f`` at each point (the value of the cell that contains it); kept for the last ``points`` array,
+        which CG asks about several times per iteration (read-only)."""
+        if self._cached is not None and self._cached[0] is points:
+            return self._cached[1]
+        rows, columns = self.field.shape
+        x, y = points[:, 0], points[:, 1]
+        if x.min(initial=0.0) < 0 or max(x.max(initial=0.0), y.max(initial=0.0)) >= 1 or y.min(initial=0.0) < 0:
+            x, y = np.mod(x, 1.0), np.mod(y, 1.0)
+        cells = np.minimum((y * rows).astype(np.intp), rows - 1) * columns
+        cells += np.minimum((x * columns).astype(np.intp), columns - 1)
+        values = self._flat[cells]
+        values.flags.writeable = False
+        self._cached = (points, values)
+        return values
+
+    def inner(self, points, u, v):
+        return float(np.einsum("i,ij,ij->j", self.factor(points), u, v) @ self._metric)
+
+    def riesz(self, points, covector):
+        return covector / (self._metric * self.factor(points)[:, None])
+
+
 class PinnedTorus(Torus):
     """The torus with some points held where they are (a video's still dots, ``stipple.video``).
 

@@ -185,7 +185,10 @@ def multiclass_problem(
         shares = np.where(masses > 0, (counts / n_points) * masses.sum() / np.maximum(masses, 1e-300), 0.0)
         union_density = sum(share * weights for share, weights in zip(shares, densities, strict=True))
     kept = [index for index, count in enumerate(counts) if count > 0]
+    # The flat metric and the full default bandwidth: the classes' run stops by ``tol``, whose meaning the
+    # density-scaled metric would change, and neither was measured on colour (docs/performance.md).
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
+    options.update(precondition=False, bandwidth_factor=1.0)
     union = torus_problem(union_density, n_points, bandwidth, **options)
     classes = []
     for index in kept:

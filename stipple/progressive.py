@@ -81,6 +81,9 @@ def progressive_problem(
     if not (isinstance(levels, (int, np.integer)) and 1 <= levels <= max(int(n_points), 1)):
         raise StippleError(f"levels must be an integer in [1, M = {n_points}], not {levels!r}")
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
+    # The flat metric and the full default bandwidth, as for the classes of ``multiclass_problem``: the levels'
+    # weighting was measured with them (docs/plotters.md), the density-scaled metric was not.
+    options.update(precondition=False, bandwidth_factor=1.0)
     full = torus_problem(weights, n_points, bandwidth, **options)
     ends = np.cumsum(pass_counts(n_points, levels))
     parts = [

@@ -317,6 +317,9 @@ def _problem(weights, bandwidth, settings, inks):
         epsilon=settings.epsilon,
         hessian=settings.hessian,
         near_field=settings.near_field,
+        # The flat metric, with which the warm frames' pinned phase and correction were measured (docs/video.md);
+        # the cold first frame still starts coarse to fine.
+        precondition=False,
     )
 
 

@@ -64,3 +64,29 @@ def test_quality_inputs_have_the_documented_properties(tmp_path):
     unit = np.random.default_rng(1).random((2000, 2))
     crop = np.asarray(quality.torus_crop(unit, made["strip6x1"]))
     assert crop.shape == (quality.CROP_PIXELS,) * 2 and 0 < np.mean(crop < 128) < 0.5
+
+
+def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
+    """Two versions (here the same command twice) alternated: wall time, peak memory, iterations and the same
+    measures for both; identical commands give identical points and so identical quality."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import paired
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    command = f"{sys.executable} -m stipple"
+    output = tmp_path / "paired.json"
+    results = paired.main(
+        ["--old", command, "--cases", "smoke", "--repeats", "2", "--out", str(tmp_path), "--output", str(output)]
+    )
+    assert json.loads(output.read_text()) == results
+    entry = results["smoke"]
+    old, new = entry["versions"]["old"], entry["versions"]["new"]
+    for version in (old, new):
+        assert len(version["seconds"]) == 2 and version["median_seconds"] > 0 and version["peak_gib"] > 0
+        assert version["returncodes"] == [0, 0] and all(count > 0 for count in version["iterations"])
+        quality = version["quality"]
+        assert len(quality["psnr_exact"]) == 3 and 0 < quality["p01"] < 1.2 and quality["untruncated_energy"] > 0
+        assert 0 <= quality["picture_sigma4_rmse"] < 0.1
+    assert old["quality"] == new["quality"] and entry["ratio_new_over_old"] > 0
+    assert len(entry["ratios_per_round"]) == 2

@@ -86,7 +86,10 @@ def initial_loop(weights, n_vertices, seed=0, threads=None):
     2-opt. The loop has the tour's length; ``draw_line`` then stretches it to the line's length.
     """
     rows, columns = weights.shape
-    dots = halftone_torus(weights, n_vertices, seed=seed, threads=threads)
+    # The line's tuned start: the single-image run as it was before the coarse-to-fine start (docs/performance.md).
+    dots = halftone_torus(
+        weights, n_vertices, seed=seed, threads=threads, precondition=False, bandwidth_factor=1.0, levels=False
+    )
     pixels = np.mod(dots.points, 1.0) * np.array([columns, rows])
     order = two_opt(pixels, tree_tour(pixels)) if n_vertices > MIN_CURVE_VERTICES else np.arange(n_vertices)
     return resample_closed(pixels[order], n_vertices) / np.array([columns, rows])

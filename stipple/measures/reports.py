@@ -59,7 +59,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
             input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
         )
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
-        problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10)
+        problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10, bandwidth_factor=1.0)
         return evaluate_torus(problem, unit, weights)
     density = sphere_density(
         input_source,
@@ -87,7 +87,9 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     rows, columns = rgb.shape[:2]
     unit = np.mod(pixels / np.array([columns, rows]), 1.0)
     union = sum(layer.density for layer in layers)
-    report = evaluate_torus(torus_problem(union, len(unit), bandwidth, epsilon=1e-10), unit, union)
+    report = evaluate_torus(
+        torus_problem(union, len(unit), bandwidth, epsilon=1e-10, bandwidth_factor=1.0), unit, union
+    )
     report["classes"] = []
     for layer in layers:
         chosen = names == layer.name
@@ -95,7 +97,7 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
         entry = {"name": layer.name, "points": count, "mass_share": share, "quota": share * len(unit)}
         if count >= 2:
             band = None if bandwidth is None else class_bandwidth(bandwidth, count, len(unit))
-            problem = torus_problem(layer.density, count, band, epsilon=1e-10)
+            problem = torus_problem(layer.density, count, band, epsilon=1e-10, bandwidth_factor=1.0)
             measured = evaluate_torus(problem, unit[chosen], layer.density)
             entry.update({key: measured[key] for key in ("bandwidth", "energy", "energy_ratio_to_iid")})
             entry["neighbour_distance_over_hexagonal"] = measured.get("neighbour_distance_over_hexagonal")

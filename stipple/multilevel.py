@@ -1,0 +1,172 @@
+"""Coarse-to-fine starts: solve a quarter of the dots at half the bandwidth, split each into its share, repeat.
+
+Most of a cold run's iterations move dots over long distances, and those distances are long in units of the dot
+spacing. A problem with a quarter of the dots (``default_bandwidth`` then halves ``N``) settles the same
+long-range transport at a quarter of the cost per iteration; its solution, split in place, is a start whose
+tone is right down to the coarse spacing. Applied recursively, the full problem only has to settle its own
+local arrangement.
+
+``split_points`` is the transfer from one level to the next:
+
+- **shares**: the density's mass in each coarse dot's cell (the periodic Voronoi cell, measured on the pixels,
+  sub-sampled so that every cell gets several samples), accumulated over the coarse dots in Hilbert-curve order
+  and rounded: dot ``c`` gets ``round(M C_c) - round(M C_{c-1})`` children, with ``C`` the cumulative mass
+  fraction. Every cell then holds its mass in children to within one, and any run of consecutive cells along the
+  curve too.
+- **positions**: the children of a dot are the points nearest to it of the half-spacing lattice spanned by its
+  two nearest coarse neighbours (a square or hexagonal coarse lattice becomes the lattice of half its spacing,
+  exactly, with four children per dot), so the fine start inherits the coarse arrangement's regularity instead
+  of the clumps of random positions.
+"""
+
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .optimize import minimize
+from .sampling import hilbert_index
+
+# Dots per level: each coarser level has 1/RATIO of the dots of the next (4: half the spacing, half the N).
+RATIO = 4
+# The coarsest level has at least this many dots; a problem with fewer than RATIO times as many has no levels.
+SMALLEST = 2000
+# CG iterations per coarse level at most (each level also stops by its problem's ``settle``).
+LEVEL_ITERATIONS = 50
+# Samples of the density per coarse cell (at least) when measuring the cells' masses.
+SAMPLES_PER_CELL = 16
+# Candidate lattice points per dot: offsets (i + 1/2, j + 1/2) half-vectors, |i|, |j| <= LATTICE_REACH.
+LATTICE_REACH = 3
+
+
+def level_counts(n_points, ratio=RATIO, smallest=None):
+    """Dot counts of the coarse levels, coarsest first (empty when ``n_points < ratio * smallest``; default
+    ``SMALLEST``)."""
+    smallest = SMALLEST if smallest is None else smallest
+    counts = []
+    count = n_points
+    while count // ratio >= smallest:
+        count = int(round(count / ratio))
+        counts.append(count)
+    return counts[::-1]
+
+
+def _periodic_tree(positions, scale):
+    return cKDTree(positions, boxsize=np.asarray(scale, dtype=float) * (1 + 1e-12))
+
+
+def cell_masses(weights, points, scale, samples_per_cell=SAMPLES_PER_CELL, threads=1):
+    """The density's mass in the periodic Voronoi cell of each of ``points`` (unit coordinates), as fractions.
+
+    Every pixel is cut into ``f x f`` sub-pixels (``f`` the least giving ``samples_per_cell`` sub-pixels per dot)
+    and each sub-pixel's mass goes to the dot nearest to its centre (physical distances).
+    """
+    rows, columns = weights.shape
+    factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / weights.size))))
+    scale = np.asarray(scale, dtype=float)
+    tree = _periodic_tree(np.mod(points, 1.0) * scale, scale)
+    masses = np.zeros(len(points))
+    fine_x = (np.arange(columns * factor) + 0.5) / (columns * factor) * scale[0]
+    # One band of pixel rows at a time: bounded memory at any size.
+    band = max(1, 2**20 // (columns * factor * factor))
+    for top in range(0, rows, band):
+        block = weights[top : top + band]
+        fine_rows = np.arange(top * factor, (top + len(block)) * factor)
+        fine_y = (fine_rows + 0.5) / (rows * factor) * scale[1]
+        xx, yy = np.meshgrid(fine_x, fine_y)
+        values = np.repeat(np.repeat(block, factor, axis=0), factor, axis=1).ravel()
+        inked = values > 0
+        _, owner = tree.query(np.stack([xx.ravel()[inked], yy.ravel()[inked]], axis=1), workers=threads)
+        masses += np.bincount(owner, weights=values[inked], minlength=len(points))
+    return masses / masses.sum()
+
+
+def shares(masses, points, n_points):
+    """Children per dot: ``round(M C_c) - round(M C_{c-1})`` with ``C`` the cumulative mass fraction of the dots
+    taken in Hilbert-curve order of their positions; they sum to ``n_points`` and each is within one of
+    ``M * masses[c]``."""
+    cells = np.minimum((np.mod(points, 1.0) * 2**16).astype(np.int64), 2**16 - 1)
+    order = np.argsort(hilbert_index(cells[:, 0], cells[:, 1], 16), kind="stable")
+    cumulative = np.cumsum(masses[order])
+    cumulative /= cumulative[-1]
+    bounds = np.rint(np.concatenate([[0.0], cumulative]) * n_points).astype(np.int64)
+    counts = np.empty(len(points), dtype=np.int64)
+    counts[order] = np.diff(bounds)
+    return counts
+
+
+def lattice_vectors(points, scale, threads=1):
+    """Per dot, two neighbour vectors (physical): the nearest neighbour and the one of the next five nearest whose
+    direction is closest to a right angle to it."""
+    scale = np.asarray(scale, dtype=float)
+    positions = np.mod(points, 1.0) * scale
+    tree = _periodic_tree(positions, scale)
+    neighbours = min(7, len(points))
+    _, index = tree.query(positions, k=neighbours, workers=threads)
+    delta = positions[index[:, 1:]] - positions[:, None, :]
+    delta -= scale * np.rint(delta / scale)
+    first = delta[:, 0]
+    length = np.linalg.norm(delta, axis=2)
+    cosine = np.abs(np.einsum("ij,ikj->ik", first, delta[:, 1:])) / np.maximum(length[:, :1] * length[:, 1:], 1e-300)
+    second = delta[np.arange(len(points)), 1 + np.argmin(cosine, axis=1)]
+    return first, second
+
+
+def lattice_children(points, counts, scale, threads=1):
+    """Each dot's ``counts`` children: the points nearest to it of the lattice spanned by half its two neighbour
+    vectors, shifted by a quarter of both (so that four children sit symmetrically around it). Unit coordinates,
+    the children of dot ``c`` consecutive, in dot order."""
+    scale = np.asarray(scale, dtype=float)
+    first, second = lattice_vectors(points, scale, threads)
+    steps = np.arange(-LATTICE_REACH, LATTICE_REACH) + 0.5
+    i, j = (grid.ravel() for grid in np.meshgrid(steps, steps))
+    # (dots, candidates, 2) offsets in physical units.
+    offsets = (i[None, :, None] * first[:, None, :] + j[None, :, None] * second[:, None, :]) / 2
+    rank = np.argsort(np.einsum("ijk,ijk->ij", offsets, offsets), axis=1, kind="stable")
+    owner = np.repeat(np.arange(len(points)), counts)
+    within = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
+    within = np.minimum(within, rank.shape[1] - 1)
+    chosen = offsets[owner, rank[owner, within]]
+    return np.mod(points[owner] + chosen / scale, 1.0)
+
+
+def split_points(weights, points, n_points, scale, threads=1):
+    """``n_points`` dots from the coarse ``points``: each dot's share of the mass in its cell, placed on the
+    half-spacing lattice of its neighbours (see the module docstring); the children of dot ``c`` are
+    consecutive, in dot order."""
+    counts = shares(cell_masses(weights, points, scale, threads=threads), points, n_points)
+    return lattice_children(points, counts, scale, threads)
+
+
+def coarse_to_fine(problem, rng, *, time_limit=None, callback=None, iterations=LEVEL_ITERATIONS, smallest=None):
+    """A start for ``problem`` from its coarse levels: the coarsest from its stratified start, every level
+    optimised (at most ``iterations`` CG iterations, or to its ``settle``) and split into the next.
+
+    ``problem`` needs ``level`` and ``split`` (``stipple.halftone.Problem``); returns ``problem.stratified``'s
+    start where it has no levels (fewer than ``RATIO * smallest`` dots, default ``SMALLEST``). ``time_limit`` is
+    for all levels; ``callback(state)`` is shown every level's states and may stop them (the points reached are
+    split on).
+    """
+    counts = level_counts(problem.n_points, smallest=smallest)
+    if not counts or problem.level is None:
+        return problem.stratified(rng, problem.n_points)
+    started = time.perf_counter()
+    points = None
+    for count in counts:
+        level = problem.level(count)
+        points = level.stratified(rng, count) if points is None else problem.split(points, count)
+        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        result = minimize(
+            level.objective,
+            level.manifold,
+            points,
+            tol=1e-6,
+            max_iterations=iterations,
+            time_limit=remaining,
+            settle=level.settle,
+            callback=callback,
+        )
+        points = result.points
+        if result.status == "stopped":
+            break
+    return problem.split(points, problem.n_points)

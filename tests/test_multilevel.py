@@ -1,0 +1,157 @@
+"""The coarse-to-fine start (``stipple.multilevel``) and the density-scaled metric (``ScaledTorus``), each by its
+own property: direct sums against the fast cell masses, exact lattices, the metric's Riesz identity, and energies
+against plain runs."""
+
+import numpy as np
+import pytest
+
+from stipple import multilevel
+from stipple.halftone import run
+from stipple.manifolds import ScaledTorus, Torus
+from stipple.multilevel import cell_masses, coarse_to_fine, level_counts, shares, split_points
+from stipple.torus import stiffness_field, torus_problem, torus_scale
+
+
+def brute_force_masses(weights, points, scale, factor):
+    """The mass of every sub-pixel given to the nearest point by direct periodic distances (O(samples x M))."""
+    rows, columns = weights.shape
+    x = (np.arange(columns * factor) + 0.5) / (columns * factor)
+    y = (np.arange(rows * factor) + 0.5) / (rows * factor)
+    xx, yy = np.meshgrid(x, y)
+    values = np.repeat(np.repeat(weights, factor, axis=0), factor, axis=1).ravel()
+    delta = np.stack([xx.ravel(), yy.ravel()], axis=1)[:, None, :] - points[None, :, :]
+    delta -= np.rint(delta)
+    distance = np.sum((delta * scale) ** 2, axis=2)
+    owner = np.argmin(distance, axis=1)
+    masses = np.bincount(owner, weights=values, minlength=len(points))
+    return masses / masses.sum()
+
+
+@pytest.mark.parametrize("shape", [(12, 12), (9, 17)])
+def test_cell_masses_are_the_nearest_point_sums(rng, shape):
+    weights = rng.random(shape)
+    weights[0, :3] = 0.0
+    points = rng.random((40, 2))
+    scale = torus_scale(shape)
+    factor = int(np.ceil(np.sqrt(16 * len(points) / weights.size)))
+    fast = cell_masses(weights, points, scale)
+    assert np.allclose(fast, brute_force_masses(weights, points, scale, factor), atol=1e-12)
+    assert fast.sum() == pytest.approx(1.0)
+
+
+def test_shares_keep_the_mass_of_every_cell_and_of_every_run_of_cells_along_the_curve(rng):
+    masses = rng.random(300) ** 3
+    masses /= masses.sum()
+    points = rng.random((300, 2))
+    for total in (300, 1200, 1237):
+        counts = shares(masses, points, total)
+        assert counts.sum() == total and np.all(counts >= 0)
+        # Each cell: within one dot of its mass.
+        assert np.all(np.abs(counts - total * masses) < 1.0)
+
+
+def test_split_keeps_the_mass_in_every_cell(rng):
+    """Every coarse dot gets children in proportion to the density's mass in its own cell (to within one)."""
+    weights = rng.random((24, 24)) ** 2
+    weights[:8, :8] = 0.0
+    coarse = torus_problem(weights, 150, near_field=False).sample(rng, 150)
+    scale = torus_scale(weights.shape)
+    fine = split_points(weights, coarse, 600, scale)
+    assert fine.shape == (600, 2) and np.all((fine >= 0) & (fine < 1))
+    expected = 600 * brute_force_masses(weights, coarse, scale, int(np.ceil(np.sqrt(16 * 150 / weights.size))))
+    counts = shares(cell_masses(weights, coarse, scale), coarse, 600)
+    assert np.all(np.abs(counts - expected) < 1.0 + 1e-9)
+    # The children of a dot sit around it, within its neighbourhood.
+    owner = np.repeat(np.arange(len(coarse)), counts)
+    delta = fine - coarse[owner]
+    delta -= np.rint(delta)
+    assert np.max(np.hypot(*(delta * scale).T)) < 0.5
+
+
+@pytest.mark.parametrize("k", [4, 7])
+def test_split_of_a_lattice_is_the_lattice_of_half_its_spacing(k):
+    """For a constant density the transfer is exact: a k x k lattice becomes the 2k x 2k lattice, whose
+    bandlimited error vanishes below its size (an oracle independent of the split)."""
+    weights = np.ones((8 * k, 8 * k))
+    grid = (np.arange(k) + 0.5) / k
+    coarse = np.stack([c.ravel() for c in np.meshgrid(grid, grid)], axis=1)
+    fine = split_points(weights, coarse, 4 * k * k, (1.0, 1.0))
+    half = (np.arange(2 * k) + 0.5) / (2 * k)
+    expected = np.stack([c.ravel() for c in np.meshgrid(half, half)], axis=1)
+    key = lambda p: np.lexsort((np.round(p[:, 0], 9), np.round(p[:, 1], 9)))  # noqa: E731
+    assert np.allclose(fine[key(fine)], expected[key(expected)], atol=1e-12)
+    problem = torus_problem(weights, 4 * k * k, 2 * k - 2, near_field=False, epsilon=1e-12)
+    problem.objective.set_points(fine)
+    assert problem.objective.energy() < 1e-20
+
+
+def test_level_counts_quarter_the_dots_down_to_the_smallest():
+    assert level_counts(100_000) == [6250, 25000]
+    assert level_counts(7999) == []
+    assert level_counts(8000) == [2000]
+    counts = level_counts(10**6)
+    assert counts[-1] == 250000 and all(abs(b - 4 * a) <= 2 for a, b in zip(counts[:-1], counts[1:], strict=False))
+
+
+def test_scaled_metric_gradient_is_the_riesz_representative(rng):
+    """``inner(p, riesz(p, c), v) = c . v`` for every v: the gradient in the scaled metric represents the same
+    differential, so CG minimises the same energy."""
+    field = 0.1 + rng.random((5, 7))
+    manifold = ScaledTorus((1.0, 5 / 7), field)
+    points, covector, vector = rng.random((30, 2)), rng.standard_normal((30, 2)), rng.standard_normal((30, 2))
+    assert manifold.inner(points, manifold.riesz(points, covector), vector) == pytest.approx(
+        float(np.sum(covector * vector)), rel=1e-12
+    )
+    rows = np.minimum((points[:, 1] * 5).astype(int), 4)
+    columns = np.minimum((points[:, 0] * 7).astype(int), 6)
+    assert np.array_equal(manifold.factor(points), field[rows, columns])
+    with pytest.raises(ValueError):
+        ScaledTorus((1.0, 1.0), np.zeros((2, 2)))
+
+
+def test_stiffness_field_grows_with_the_density():
+    weights = np.tile(np.linspace(0.0, 1.0, 32), (32, 1))
+    field = stiffness_field(weights, 2000)
+    assert np.all(field > 0) and np.all(np.diff(field[:, 3:-3], axis=1) > 0)
+    assert np.allclose(stiffness_field(np.ones((10, 20)), 500), 1.0)
+
+
+def inputs():
+    y, x = np.mgrid[0:40, 0:40] / 40
+    gradient = 0.05 + 0.95 * x
+    disc = np.where((x - 0.5) ** 2 + (y - 0.5) ** 2 < 0.09, 1.0, 0.1)
+    strip = np.tile(0.2 + 0.8 * np.sin(np.pi * np.linspace(0, 1, 60)) ** 2, (20, 1))
+    return [gradient, disc, strip]
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_coarse_to_fine_and_the_scaled_metric_never_end_above_a_plain_run(index):
+    """Same number of full-size iterations, from the same seed: the new start and metric end at an energy no
+    higher than the flat metric from the stratified start, on three inputs."""
+    weights = inputs()[index]
+    count, iterations = 2400, 30
+    plain = torus_problem(weights, count, precondition=False)
+    plain_result = run(plain, iterations=iterations, settle=0, correct=False, levels=False)
+    new = torus_problem(weights, count)
+    start = coarse_to_fine(new, np.random.default_rng(0), smallest=300)
+    new_result = run(new, init=start, iterations=iterations, settle=0, correct=False)
+    assert new_result.energy <= plain_result.energy
+    assert isinstance(plain.manifold, Torus) and not isinstance(plain.manifold, ScaledTorus)
+
+
+def test_coarse_to_fine_without_levels_is_the_stratified_start(rng):
+    weights = inputs()[0]
+    problem = torus_problem(weights, 500)
+    start = coarse_to_fine(problem, np.random.default_rng(3))
+    assert np.array_equal(start, problem.stratified(np.random.default_rng(3), 500))
+
+
+def test_coarse_to_fine_start_is_reproducible_and_used_by_default(monkeypatch):
+    weights = inputs()[1]
+    monkeypatch.setattr(multilevel, "SMALLEST", 300)
+    problem = torus_problem(weights, 1500)
+    first = run(problem, iterations=3, correct=False)
+    second = run(torus_problem(weights, 1500), iterations=3, correct=False)
+    assert np.array_equal(first.points, second.points)
+    plain = run(torus_problem(weights, 1500), iterations=3, correct=False, levels=False)
+    assert not np.array_equal(first.points, plain.points)
