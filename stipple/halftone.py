@@ -24,7 +24,8 @@ COARSE_TIME_SHARE = 0.04
 LEVELS_TIME_SHARE = 0.25
 # Default ``settle``: stop when 20 iterations gain less than this fraction of the energy (README, Defaults).
 # With the spread step (``stipple.spread``) 2e-3: the portrait stops after 117 iterations (146 at 1.2e-3 without
-# it) and the dark rocket after 108 (139) at p01 above the flat run's 166 and 150 (docs/performance.md).
+# the step) and the dark rocket after 108 (139), both with p01 above that of the flat run's stop after 166 and 150
+# iterations; without the step, 2e-3 stops them below it (docs/performance.md).
 DEFAULT_SETTLE = 2e-3
 # ... and the previous version's, for the flat metric from the stratified start (``precondition=False``): the
 # density-scaled metric gains more per iteration at the same quality, so the same fraction stops it earlier than
