@@ -28,6 +28,7 @@ from .multilevel import split_points
 from .nearfield import NearField, TorusPairs
 from .objective import Discrepancy, SumObjective
 from .sampling import sample_image, stratified_sample
+from .spread import spread_close
 from .transforms import BACKENDS, TorusFourier, centred_modes, make_nufft
 
 # Transform accuracy: at M = 10^6 the energy after 8 CG iterations moved by 4e-9 of itself against 1e-9, at
@@ -233,6 +234,7 @@ def torus_problem(
             bandwidth_factor=bandwidth_factor,
         ),
         split=lambda points, count: split_points(weights, points, count, scale, fourier.threads),
+        spread=(lambda points: spread_close(points, weights)) if precondition else None,
         settings={
             "domain": "torus",
             "points": n_points,

@@ -128,7 +128,8 @@ def test_two_processes_started_together_on_one_checkpoint(tmp_path):
     assert not (tmp_path / f"dots{3 - winner}.csv").exists()
     saved = np.load(checkpoint)["points"] * 128
     written = np.loadtxt(tmp_path / f"dots{winner}.csv", delimiter=",", skiprows=1)
-    # The output is the checkpoint's points after the low-frequency correction: moved by a small fraction of the
-    # spacing (about 3 px here), where another run's points would be anywhere.
-    assert np.max(np.abs((saved - written + 64) % 128 - 64)) < 0.5
+    # The output is the checkpoint's points after the spread step (when the run settled in time), its few
+    # iterations and the low-frequency correction: moved by a fraction of the spacing (about 3 px here), where
+    # another run's points would be anywhere.
+    assert np.max(np.abs((saved - written + 64) % 128 - 64)) < 1.0
     assert leftovers(tmp_path) == []

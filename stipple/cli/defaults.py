@@ -7,7 +7,7 @@ BETAS = ("hestenes-stiefel", "daniel")
 SETTLE_WINDOW = 20
 # stipple.halftone
 INITS = ("stratified", "density", "uniform")
-DEFAULT_SETTLE = 1.2e-3
+DEFAULT_SETTLE = 2e-3
 # stipple.transforms
 BACKENDS = ("ducc0", "finufft")
 # stipple.video

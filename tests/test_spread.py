@@ -1,0 +1,105 @@
+"""The spread step (``stipple.spread``) by its own properties: an exact lattice is left alone, a close pair is
+separated while dots away from it stay, every move is bounded, empty pixels keep their dots, and in a run it
+raises the low tail of the nearest-neighbour ratio."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from stipple.halftone import run
+from stipple.measures.evaluate import torus_neighbour_ratios
+from stipple.spread import SPREAD_PASSES, hexagonal_spacing_at, spread_close
+from stipple.torus import torus_problem
+
+
+def square_lattice(k):
+    steps = (np.arange(k) + 0.5) / k
+    x, y = np.meshgrid(steps, steps)
+    return np.stack([x.ravel(), y.ravel()], axis=1)
+
+
+def periodic_distance(a, b, size):
+    delta = (a - b) * size
+    delta -= size * np.rint(delta / size)
+    return np.linalg.norm(delta, axis=-1)
+
+
+def test_hexagonal_spacing_is_that_of_the_pixel_density():
+    weights = np.ones((8, 8))
+    weights[:, 4:] = 3.0
+    points = np.array([[0.1, 0.5], [0.9, 0.5], [0.6, 0.1]])
+    density = len(points) * np.array([1.0, 3.0, 3.0]) / weights.sum()
+    assert np.allclose(hexagonal_spacing_at(points, weights), np.sqrt(2 / (np.sqrt(3) * density)))
+    weights[:, 4:] = 0.0
+    assert np.isinf(hexagonal_spacing_at(points, weights)[1:]).all()
+
+
+def test_a_lattice_above_the_target_is_left_exactly_alone():
+    # A square lattice's ratio is sqrt(sqrt(3) / 2) = 0.93 everywhere: above the target, nothing moves.
+    points = square_lattice(16)
+    spread, moved = spread_close(points, np.ones((64, 64)), target=0.9)
+    assert moved == 0
+    assert np.array_equal(spread, points)
+
+
+def test_a_close_pair_is_separated_and_dots_away_from_it_stay():
+    k, pixels = 16, 64
+    lattice = square_lattice(k)
+    extra = lattice[100] + np.array([0.2, 0.1]) / k
+    points = np.vstack([lattice, extra])
+    weights = np.ones((pixels, pixels))
+    size = np.array([pixels, pixels], dtype=float)
+    spread, moved = spread_close(points, weights)
+    assert moved >= 2
+    before = periodic_distance(points[100], points[-1], size)
+    after = periodic_distance(spread[100], spread[-1], size)
+    assert after > before + 0.5 * (0.78 * hexagonal_spacing_at(points, weights)[0] - before)
+    # The smallest nearest-neighbour distance of the whole set grows.
+    nearest = [cKDTree(p * size, boxsize=size).query(p * size, k=2)[0][:, 1].min() for p in (points, spread)]
+    assert nearest[1] > nearest[0]
+    # Dots more than three lattice spacings from the pair never move (each pass reaches one neighbour further).
+    far = periodic_distance(points, extra, size) > 3 * pixels / k
+    assert np.array_equal(spread[far], points[far])
+
+
+def test_moves_are_bounded_and_empty_pixels_keep_their_dots(rng):
+    weights = rng.random((40, 60)) + 0.2
+    weights[:10, :] = 0.0
+    points = rng.random((3000, 2))
+    spread, moved = spread_close(points, weights, target=0.85)
+    assert moved > 0
+    assert np.all((spread >= 0) & (spread < 1))
+    size = np.array(weights.shape[::-1], dtype=float)
+    shift = periodic_distance(spread, points, size)
+    spacing = hexagonal_spacing_at(points, weights)
+    empty = np.isinf(spacing)
+    assert empty.any() and np.all(shift[empty] < 1e-12)
+    # A pass moves a dot by at most half the target spacing (its neighbour at distance 0 at the worst).
+    assert np.all(shift[~empty] <= SPREAD_PASSES * 0.85 * spacing[~empty] / 2 + 1e-9)
+    # Fewer dots below the target afterwards (i.i.d. points: most are below it, three passes fix some), and the
+    # low tail rises.
+    ratio_before = torus_neighbour_ratios(points, weights)[~empty]
+    ratio_after = torus_neighbour_ratios(spread, weights)[~empty]
+    assert np.sum(ratio_after < 0.85) < 0.9 * np.sum(ratio_before < 0.85)
+    assert np.percentile(ratio_after, 5) > np.percentile(ratio_before, 5) + 0.1
+
+
+@pytest.fixture(scope="module")
+def small_runs():
+    yy, xx = np.mgrid[0:48, 0:48] / 48
+    weights = 0.15 + np.where((xx - 0.5) ** 2 + (yy - 0.5) ** 2 < 0.09, 0.85, 0.2 * xx)
+    problem = torus_problem(weights, 3000)
+    return weights, problem, {flag: run(problem, seed=0, iterations=40, spread=flag) for flag in (False, True)}
+
+
+def test_spread_in_a_run_raises_the_ratio_tail_at_nearly_the_same_energy(small_runs):
+    weights, problem, results = small_runs
+    plain, spread = results[False], results[True]
+    assert "close dots spread" in spread.message and "spread" not in plain.message
+    assert spread.iterations == plain.iterations
+    tails = [np.percentile(torus_neighbour_ratios(r.points, weights), 1) for r in (plain, spread)]
+    assert tails[1] > tails[0]
+    problem.objective.set_points(plain.points)
+    plain_energy = problem.objective.energy()
+    problem.objective.set_points(spread.points)
+    assert problem.objective.energy() < 1.01 * plain_energy
