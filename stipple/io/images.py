@@ -252,11 +252,26 @@ def load_colour(source, name=None):
         raise StippleError(f"{name}: file is empty")
     if data.startswith(NPY_MAGIC):
         raise StippleError(f"{name}: colour separation needs an image (PNG, JPEG, ...), not a .npy array")
-    image = open_image(data, name, "not a supported image, or truncated")
-    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
-    colour = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    colour = image_colour(open_image(data, name, "not a supported image, or truncated"), name)
     check_grid(colour[..., 0], name)
     return colour
+
+
+# Modes whose values Pillow's ``convert("RGBA")`` would clip or truncate to 8 bits: read as gray, then spread.
+_DEEP_GRAY = ("I;16", "I;16B", "I;16L", "I;16N", "I", "F", "L", "1")
+
+
+def image_colour(image, name="input"):
+    """Red, green and blue in [0, 1] of a decoded PIL image, ``(H, W, 3)``, alpha composited on white.
+
+    The one colour reader: gray images of every depth (8- and 16-bit, 32-bit integer, float) give three equal
+    channels holding exactly ``load_gray``'s values, so that a picture has the same tone on the gray and the
+    colour paths; RGB(A), palettes and the rest are decoded by Pillow.
+    """
+    if image.mode in _DEEP_GRAY:
+        return np.repeat(_gray_values(image, name)[..., None], 3, axis=2)
+    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+    return rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
 
 
 def load_input(source, **options):

@@ -20,7 +20,7 @@ from PIL import Image
 from ..errors import StippleError
 from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import image_density, load_colour, load_density
+from .images import image_colour, image_density, load_colour, load_density
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
@@ -186,8 +186,7 @@ def _decoded(image, name, invert, gamma, levels, colour=False):
     """A decoded frame's density, or its colours in [0, 1] alpha composited on white (as ``load_colour``)."""
     if not colour:
         return image_density(image, invert=invert, gamma=gamma, levels=levels, name=name)
-    rgba = np.asarray(image, dtype=np.float64) / 255.0
-    return rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    return image_colour(image, name)
 
 
 def _reason(error):
