@@ -42,6 +42,19 @@ def check_writable(path):
         raise StippleError(f"{path}: not writable ({error.strerror})") from None
 
 
+def check_folder(directory):
+    """Raise, naming ``directory``, unless it is a folder that can take new files."""
+    if not os.path.isdir(directory):
+        raise StippleError(f"{directory}: is not a folder")
+    if not os.stat(directory).st_mode & 0o222:
+        raise StippleError(f"{directory}: the output folder is read-only; make it writable or choose another")
+    try:
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as error:
+        raise StippleError(f"{directory}: the output folder is not writable ({error.strerror})") from None
+
+
 def atomic_write(path, data):
     """Write ``data`` (bytes) to ``path`` so that readers see the old file or the whole new one."""
     commit_outputs([(path, data)])

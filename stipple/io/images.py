@@ -201,11 +201,34 @@ def stretch_levels(gray, levels):
     linearly, clipped; unchanged for None (see ``load_density``)."""
     if levels is None:
         return gray
-    black, white = np.percentile(gray, [0.5, 99.5]) if levels == "auto" else levels
-    if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
-        what = "the image has one gray value" if levels == "auto" else f"not {black:g},{white:g}"
-        raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1 ({what})")
+    if levels == "auto":
+        black, white = np.percentile(gray, [0.5, 99.5])
+        if not black < white:
+            raise StippleError(
+                f"--levels auto: the image has one gray value ({black:.3g}) at its 0.5th and 99.5th percentiles; "
+                "nothing to stretch"
+            )
+    else:
+        black, white = check_levels(levels)
     return np.clip((gray - black) / (white - black), 0.0, 1.0)
+
+
+def check_levels(levels):
+    """``levels`` (None, "auto" or ``(black, white)`` with ``0 <= black < white <= 1``), checked."""
+    if levels is None or levels == "auto":
+        return levels
+    black, white = (float(value) for value in levels)
+    if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
+        raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1, not {black:g},{white:g}")
+    return black, white
+
+
+def check_load_options(*, invert=False, gamma=1.0, value_range=None, levels=None):
+    """Raise if a setting of ``load_density`` is out of range (checked before any file is read)."""
+    _check_gamma(gamma)
+    if value_range is not None:
+        check_range(value_range)
+    check_levels(levels)
 
 
 def image_density(image, *, invert=False, gamma=1.0, levels=None, name="input"):
