@@ -203,3 +203,141 @@ def test_row19_a_quoted_glob_is_expanded(grad, tmp_path):
     missing = stipple("batch", images / "*.jpg", "-d", tmp_path / "none", *FAST)
     one_line(missing, 1, "no file matches")
     assert not (tmp_path / "none").exists()
+
+
+@pytest.fixture
+def grad64(tmp_path):
+    """The issue's 64×64 gray gradient."""
+    path = tmp_path / "grad.png"
+    Image.fromarray(np.tile(np.linspace(0, 255, 64).astype(np.uint8), (64, 1))).save(path)
+    return path
+
+
+# Rows 3 and 9: a length or a bandwidth that would grow the line's grid is refused where it enters, naming the option
+# typed and its value; an odd -N too.
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--length", "1"], "--length must be in [32, "),
+        (["--length", "3"], "not 3.0"),
+        (["--length", "1e12"], "not 1000000000000.0"),
+        (["--length", "nan"], "--length must be"),
+        (["-N", "100000"], "-N/--bandwidth must be an even integer in [2, "),
+        (["-N", "3"], "-N/--bandwidth must be an even integer"),
+    ],
+)
+def test_rows3_9_line_sizes_are_bounded_where_they_enter(grad64, tmp_path, args, message):
+    output = tmp_path / "line.csv"
+    started = time.monotonic()
+    result = stipple("line", grad64, "-M", "300", "--iterations", "2", "-q", "-o", output, *args)
+    one_line(result, 1, message)
+    assert time.monotonic() - started < 20 and not output.exists()
+
+
+def test_line_sizes_keep_the_padded_grid_in_bounds():
+    from stipple.halftone import MAX_BANDWIDTH
+    from stipple.line.problem import bandwidth_limit, blank_margin, length_bounds, line_settings
+
+    weights = np.tile(np.linspace(0.1, 1.0, 64), (64, 1))
+    low, high = length_bounds(weights.shape)
+    assert blank_margin(low, weights.shape) <= 4 * 64 + 1
+    for length in (low, 1000.0, high):
+        limit = bandwidth_limit(length, weights.shape)
+        longest = 64 + 2 * blank_margin(length, weights.shape)
+        assert limit % 2 == 0 and int(2 * np.ceil(limit * longest / 64 / 2)) <= MAX_BANDWIDTH
+        assert line_settings(weights, 300, length)[1] <= limit  # the default bandwidth too
+    assert line_settings(weights, 4, None)[0] >= low  # a default length is held in bounds, not refused
+
+
+# Row 8: a blur wider than the picture is a range error, not "out of memory".
+def test_row8_evaluate_sigma_is_bounded(grad64, tmp_path):
+    picture = tmp_path / "drawn.png"
+    picture.write_bytes(grad64.read_bytes())
+    result = stipple("evaluate", picture, grad64, "--sigma", "1e9")
+    one_line(result, 1, "sigma must be in (0, 64]")
+
+
+@pytest.fixture
+def dots(grad64, tmp_path):
+    path = tmp_path / "dots.csv"
+    assert stipple("torus", grad64, *FAST, "-o", path).returncode == 0
+    return path
+
+
+# Row 10: resuming with another image or -M says which.
+def test_row10_resume_with_another_image_or_M_says_so(grad64, tmp_path):
+    checkpoint, output = tmp_path / "ck", tmp_path / "l.csv"
+    base = ["line", grad64, "--iterations", "2", "-q", "-o", output, "--checkpoint", checkpoint]
+    assert stipple(*base, "-M", "300").returncode == 0
+    one_line(stipple(*base, "-M", "200", "--resume"), 1, "the image or -M differs")
+    small = tmp_path / "small.png"
+    Image.open(grad64).resize((32, 32)).save(small)
+    base[1] = small
+    one_line(stipple(*base, "-M", "300", "--resume"), 1, "the image or -M differs")
+
+
+# Rows 11 and 12: --invert and --levels auto named.
+def test_rows11_12_invert_and_levels_auto_are_named(tmp_path):
+    black, gray = tmp_path / "black.png", tmp_path / "gray.png"
+    Image.fromarray(np.zeros((16, 16), np.uint8)).save(black)
+    Image.fromarray(np.full((16, 16), 128, np.uint8)).save(gray)
+    one_line(stipple("torus", black, "--invert", *FAST, "-o", tmp_path / "a.csv"), 1, "blank under --invert")
+    one_line(stipple("torus", gray, "--levels", "auto", *FAST, "-o", tmp_path / "b.csv"), 1, "auto: the image has one")
+
+
+# Rows 15 and 16: an unknown builtin lists the names; options that do not apply to the input are refused.
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["builtin:nosuch"], "unknown builtin 'nosuch': choose from builtin:gaussians"),
+        (["{image}", "--levels", "auto"], "--levels: for a drawn PICTURE.png"),
+        (["{image}", "--sigma", "2"], "--sigma: for a drawn PICTURE.png"),
+        (["{image}", "--inset", "2"], "--inset: for a drawn PICTURE.png"),
+    ],
+)
+def test_rows15_16_evaluate_refuses_what_does_not_apply(dots, grad64, args, message):
+    one_line(stipple("evaluate", dots, *[arg.format(image=grad64) for arg in args]), 1, message)
+
+
+def test_row16_line_with_a_picture_is_refused(grad64, tmp_path):
+    picture = tmp_path / "drawn.png"
+    picture.write_bytes(grad64.read_bytes())
+    one_line(stipple("evaluate", picture, grad64, "--line"), 1, "--line are for points, not pictures")
+
+
+# Row 17: points made for a larger image warn; points made for this one do not.
+def test_row17_points_outside_the_image_warn(dots, grad64, tmp_path):
+    small = tmp_path / "small.png"
+    Image.open(grad64).resize((32, 32)).save(small)
+    result = stipple("evaluate", dots, small)
+    assert result.returncode == 0 and "warning:" in result.stderr and "outside the 32×32 image" in result.stderr
+    assert "warning" not in stipple("evaluate", dots, grad64).stderr
+
+
+# Row 6: a blank frame is one line naming the frame; row 18: '%%' in a frame pattern is a literal '%'.
+def test_row6_a_blank_frame_is_named(tmp_path):
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    ramp = np.tile(np.linspace(0, 255, 16).astype(np.uint8), (16, 1))
+    for index, picture in enumerate([ramp, np.full_like(ramp, 255), ramp]):
+        Image.fromarray(picture).save(frames / f"{index}.png")
+    output = tmp_path / "v.csv"
+    one_line(stipple("video", frames, *FAST, "-o", output), 1, "frame 1 is blank (all white)")
+    assert not output.exists()
+
+
+def test_row18_percent_percent_in_a_frame_pattern(tmp_path):
+    from stipple.io.video import check_frame_pattern, frame_path
+
+    frames, out = tmp_path / "frames", tmp_path / "out"
+    frames.mkdir()
+    out.mkdir()
+    ramp = np.tile(np.linspace(0, 255, 16).astype(np.uint8), (16, 1))
+    for index in range(2):
+        Image.fromarray(ramp).save(frames / f"{index}.png")
+    result = stipple("video", frames, *FAST, "-o", out / "100%%_%d.png")
+    assert result.returncode == 0, result.stderr
+    assert sorted(os.listdir(out)) == ["100%_0.png", "100%_1.png"]
+    assert frame_path("a%%d_%03d.png", 7) == "a%d_007.png"
+    with pytest.raises(batch_module.StippleError, match="needs one %d"):
+        check_frame_pattern("100%%.png")

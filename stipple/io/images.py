@@ -260,6 +260,10 @@ def _check_gamma(gamma):
 def _transfer(values, invert, gamma):
     """``values`` (dark = 1) as the density: inverted if asked, then to the power ``gamma``."""
     density = 1.0 - values if invert else values
+    if invert and not np.any(density > 0):
+        raise StippleError(
+            "the image is blank under --invert (all black): --invert places dots on its light parts, and it has none"
+        )
     return density**gamma if gamma != 1.0 else density
 
 
