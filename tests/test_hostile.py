@@ -341,3 +341,22 @@ def test_row18_percent_percent_in_a_frame_pattern(tmp_path):
     assert frame_path("a%%d_%03d.png", 7) == "a%d_007.png"
     with pytest.raises(batch_module.StippleError, match="needs one %d"):
         check_frame_pattern("100%%.png")
+
+
+# Found by the sweep (bench/hostile_sweep.py): a blank image given to `line` (a traceback after the sizes were
+# checked first), and a read-only folder for `torus` written into when run as root.
+def test_sweep_line_on_a_blank_image_is_one_line(tmp_path):
+    white = tmp_path / "white.png"
+    Image.fromarray(np.full((16, 16), 255, np.uint8)).save(white)
+    one_line(stipple("line", white, "-M", "120", "--iterations", "2", "-q", "-o", tmp_path / "o.csv"), 1, "blank")
+
+
+def test_sweep_a_read_only_folder_is_refused_by_its_mode(grad, tmp_path):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        one_line(stipple("torus", grad, *FAST, "-o", folder / "o.csv"), 1, "is read-only")
+        assert os.listdir(folder) == []
+    finally:
+        folder.chmod(0o755)

@@ -139,6 +139,7 @@ def line_settings(weights, n_vertices, length=None, bandwidth=None, names=None):
     bounded: ``length`` in ``length_bounds`` (the blank margin at most ``MAX_MARGIN_SIDES`` times the image's
     longer side), ``bandwidth`` even in [2, ``bandwidth_limit``] (the padded bandwidth at most ``MAX_BANDWIDTH``).
     ``names`` spell the two settings in messages (the command line's options; default "length", "bandwidth")."""
+    weights = check_weights(weights)
     names = {"length": "length", "bandwidth": "bandwidth", **(names or {})}
     low, high = length_bounds(weights.shape)
     if length is None:
