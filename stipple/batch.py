@@ -8,8 +8,12 @@ An image is *done* when all its outputs exist and none is older than the image (
 skips those and redoes the rest, including the image a killed worker was working on.
 """
 
+import glob
 import os
+import re
+import socket
 import stat
+import threading
 import time
 import uuid
 from dataclasses import dataclass
@@ -23,8 +27,10 @@ FORMATS = ("csv", "png", "svg")
 # Exit status of a batch in which some images failed: FAILED_BASE + the number failed, at most FAILED_BASE +
 # FAILED_CAP (101-125): above 1 (bad data) and 2 (bad usage), below 126-127 (the shell's) and 128 + signal.
 FAILED_BASE, FAILED_CAP = 100, 25
-# Seconds to wait for a Dask scheduler to answer.
-CONNECT_TIMEOUT = 10
+# Seconds to wait for a Dask scheduler: a TCP connection (PROBE_TIMEOUT), then the client's whole connection and
+# handshake (CONNECT_TIMEOUT).
+PROBE_TIMEOUT, CONNECT_TIMEOUT = 2, 10
+SCHEDULER_SCHEMES, DEFAULT_SCHEDULER_PORT = ("tcp", "tls"), 8786
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,22 @@ def parse_formats(text):
     if not names or unknown:
         raise StippleError(f"format must be a comma-separated list of {', '.join(FORMATS)}, not {text!r}")
     return tuple(f".{name}" for name in dict.fromkeys(names))
+
+
+def expand_images(images):
+    """The images of a batch: a name with ``*``, ``?`` or ``[`` that is not a file is a glob (as a shell would
+    expand it, and as ``stipple video`` takes one), its files in natural order (``2.png`` before ``10.png``)."""
+    expanded = []
+    for image in images:
+        image = str(image)
+        if any(char in image for char in "*?[") and not os.path.exists(image):
+            files = [name for name in glob.glob(image) if os.path.isfile(name)]
+            if not files:
+                raise StippleError(f"{image}: no file matches this pattern")
+            expanded += sorted(files, key=lambda name: [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", name)])
+        else:
+            expanded.append(image)
+    return expanded
 
 
 def plan_batch(images, out_dir, formats, recipe):
@@ -221,17 +243,94 @@ def cluster_failure(error):
 
 
 def connect(address):
-    """A ``distributed.Client`` of the scheduler at ``address``, or a StippleError saying what is missing."""
+    """A ``distributed.Client`` of the scheduler at ``address``, or a StippleError saying what is missing.
+
+    The address is checked first (``scheduler_address``), then a TCP connection is tried for at most
+    ``PROBE_TIMEOUT`` seconds (a refused one is said at once), and the whole connection and handshake are given
+    ``CONNECT_TIMEOUT`` seconds: a listener that never answers cannot hang the batch.
+    """
+    _, host, port = scheduler_address(address)
     try:
         from distributed import Client
     except ImportError:
         raise StippleError(
             "--scheduler needs Dask distributed: pip install 'stipple[cluster]' (or dask[distributed])"
         ) from None
-    try:
+    probe(address, host, port)
+
+    def open_client():
         return Client(address, timeout=CONNECT_TIMEOUT, set_as_default=False)
+
+    try:
+        return bounded(open_client, CONNECT_TIMEOUT + 1, f"cannot reach the Dask scheduler {address}: no answer")
+    except StippleError:
+        raise
     except (OSError, TimeoutError, ValueError) as error:
         raise StippleError(f"cannot reach the Dask scheduler {address}: {' '.join(str(error).split())}") from None
+
+
+def scheduler_address(address):
+    """``(scheme, host, port)`` of a scheduler address ``tcp://HOST:PORT`` (or ``HOST:PORT``; ``tls://`` too;
+    the port defaults to Dask's 8786), checked: a known scheme, a host, a port in [1, 65535]."""
+    text = str(address).strip()
+    scheme, separator, rest = text.partition("://")
+    if not separator:
+        scheme, rest = "tcp", text
+    if scheme not in SCHEDULER_SCHEMES:
+        raise StippleError(
+            f"--scheduler {address!r}: not a Dask scheduler address (tcp://HOST:PORT); {scheme}:// is not supported"
+        )
+    host, colon, port = rest.rpartition(":")
+    if not colon or "]" in port:
+        host, port = rest, str(DEFAULT_SCHEDULER_PORT)
+    host = host.strip("[]")
+    if not host or any(char in host for char in "/ ?#@"):
+        raise StippleError(f"--scheduler {address!r}: no host (give tcp://HOST:PORT)")
+    if not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise StippleError(f"--scheduler {address!r}: invalid port {port!r} (an integer in [1, 65535])")
+    return scheme, host, int(port)
+
+
+def probe(address, host, port):
+    """Raise unless a TCP connection to ``host:port`` opens within ``PROBE_TIMEOUT`` seconds."""
+
+    def attempt():
+        try:
+            with socket.create_connection((host, port), timeout=PROBE_TIMEOUT):
+                return None
+        except ConnectionRefusedError:
+            return f"connection refused (nothing listens on {host}:{port})"
+        except socket.gaierror as error:
+            return f"unknown host {host!r} ({error.strerror})"
+        except TimeoutError:
+            return f"no answer within {PROBE_TIMEOUT} s"
+        except OSError as error:
+            return error.strerror or str(error)
+
+    problem = bounded(attempt, PROBE_TIMEOUT + 1, f"cannot reach the Dask scheduler {address}: no answer")
+    if problem is not None:
+        raise StippleError(f"cannot reach the Dask scheduler {address}: {problem}")
+
+
+def bounded(function, seconds, late):
+    """``function()`` run in a daemon thread for at most ``seconds``; a StippleError saying ``late`` after that
+    (the thread is left behind: it cannot keep the process alive)."""
+    outcome = {}
+
+    def target():
+        try:
+            outcome["value"] = function()
+        except BaseException as error:  # handed back to the caller
+            outcome["error"] = error
+
+    thread = threading.Thread(target=target, name="stipple-connect", daemon=True)
+    thread.start()
+    thread.join(seconds)
+    if thread.is_alive():
+        raise StippleError(f"{late} within {seconds:g} s")
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
 
 
 def exit_status(outcomes):

@@ -182,13 +182,22 @@ def _metadata(path, text):
 
 def _check_matches(path, metadata, problem):
     saved = metadata["settings"]
-    for key, value in problem.settings.items():
-        if saved.get(key) != value:
-            raise StippleError(
-                f"{path}: checkpoint is for a different problem: {key} was {_short(saved.get(key))}, now {value!r}"
-            )
+    differ = [key for key, value in problem.settings.items() if saved.get(key) != value]
+    if differ:
+        what = "the image or -M" if {"points", "shape"} & set(differ) else SETTING_NAMES.get(differ[0], differ[0])
+        details = "; ".join(f"{key} was {_short(saved.get(key))}, now {problem.settings[key]!r}" for key in differ[:2])
+        raise StippleError(
+            f"{path}: checkpoint is for a different run: {what} differs ({details}); "
+            "resume with the same image and options"
+        )
     if metadata["fingerprint"] != fingerprint(problem):
-        raise StippleError(f"{path}: checkpoint is for a different problem: the input differs")
+        raise StippleError(
+            f"{path}: checkpoint is for a different run: the input differs (the image, or --invert, --gamma, --levels)"
+        )
+
+
+# What a checkpoint's other settings are on the command line.
+SETTING_NAMES = {"bandwidth": "-N (the bandwidth)", "length": "--length (the line's length)"}
 
 
 def _short(value, limit=60):

@@ -137,6 +137,17 @@ def check_epsilon(epsilon):
     return float(epsilon)
 
 
+def check_run_options(*, tol=1e-4, time_limit=None, settle=None, iterations=400, beta=BETAS[0], **_):
+    """Raise if a stopping or direction setting of ``run`` is out of range (checked before any work)."""
+    check_positive("tol", tol)
+    check_positive("time_limit", time_limit, allow_none=True)
+    if settle is not None and (not isinstance(settle, (int, float)) or not 0 <= settle < 1):
+        raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
+    check_integer("iterations", iterations, 0, 10**9)
+    if beta not in BETAS:
+        raise StippleError(f"beta must be one of {', '.join(BETAS)}, not {beta!r}")
+
+
 def initial_points(problem, init, rng):
     """Starting points: i.i.d. from the density, i.i.d. uniform, or given (checked for shape)."""
     if isinstance(init, str):
@@ -215,7 +226,8 @@ def run(
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
-    settle = _check_run_arguments(problem, tol, time_limit, settle, iterations, beta)
+    settle = problem.settle if settle is None else settle
+    check_run_options(tol=tol, time_limit=time_limit, settle=settle, iterations=iterations, beta=beta)
     saver = None
     if checkpoint is not None:
         if not resume and os.path.exists(checkpoint):
@@ -258,19 +270,6 @@ def run(
         remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
         result = correct_low_frequencies(problem, result, remaining, callback)
     return result
-
-
-def _check_run_arguments(problem, tol, time_limit, settle, iterations, beta):
-    """``run``'s numbers checked where they enter; returns ``settle`` (``problem.settle`` if None)."""
-    check_positive("tol", tol)
-    check_positive("time_limit", time_limit, allow_none=True)
-    settle = problem.settle if settle is None else settle
-    if not isinstance(settle, (int, float)) or not 0 <= settle < 1:
-        raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
-    check_integer("iterations", iterations, 0, 10**9)
-    if beta not in BETAS:
-        raise StippleError(f"beta must be one of {', '.join(BETAS)}, not {beta!r}")
-    return settle
 
 
 def _start_state(problem, init, seed, levels, time_limit, callback):

@@ -174,6 +174,11 @@ def stipple_video(
     inks = None if settings.palette is None else Inks(settings, None if key is None else key[1])
     for position, (index, picture) in enumerate(frames):
         weights = picture if inks is None else inks.densities(picture)
+        if not np.any(np.asarray(weights) > 0):
+            raise StippleError(
+                f"frame {index} is blank (all white): there is nothing to place dots on; leave it out "
+                "(--start/--stop/--step) or cut the clip there"
+            )
         bandwidth = bandwidth or default_bandwidth(
             settings.n_points, weights.sum(axis=0) if inks is not None else weights
         )

@@ -105,16 +105,37 @@ def test_exit_status_counts_failures_and_is_capped():
     assert exit_status(outcomes(FAILED_CAP + 10)) == FAILED_BASE + FAILED_CAP == 125
 
 
-def test_an_output_that_cannot_be_written_fails_that_image_only(images, tmp_path):
+def test_an_output_that_is_a_folder_is_refused_before_any_work(images, tmp_path):
     out = tmp_path / "out"
-    (out / "disc.png").mkdir(parents=True)  # disc's PNG cannot be renamed into place
+    (out / "disc.png").mkdir(parents=True)
+    result = run(["batch", *images, "-d", out, *SMALL, "-q"])
+    assert result.exit_code == 1 and "disc.png: is a directory" in result.stderr, result.output
+    assert result.stderr.count("\n") == 1
+    assert sorted(os.listdir(out)) == ["disc.png"]
+
+
+def test_an_output_that_cannot_be_written_fails_that_image_only(images, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    commit = batch_module.commit_outputs
+
+    def commit_but_disc(items):  # disc's PNG cannot be renamed into place once the run has started
+        if any(path.endswith("disc.png") for path, _ in items):
+            (out / "disc.png").mkdir()
+        commit(items)
+
+    monkeypatch.setattr(batch_module, "commit_outputs", commit_but_disc)
     result = run(["batch", *images, "-d", out, *SMALL, "-q"])
     assert result.exit_code == FAILED_BASE + 1, result.output
     (line,) = failure_lines(result)
     assert line.startswith(f"stipple batch: {images[1]}: ")
     assert (out / "ramp.png").is_file() and (out / "check.png").is_file()
     assert not [name for name in os.listdir(out) if name.endswith(".tmp")]
-    assert run(["batch", *images, "-d", out, *SMALL, "-q"]).exit_code == FAILED_BASE + 1  # not taken as done
+    (out / "disc.png").rmdir()
+    monkeypatch.undo()
+    before = {name: os.stat(out / name).st_mtime_ns for name in ("ramp.png", "check.png")}
+    assert run(["batch", *images, "-d", out, *SMALL, "-q"]).exit_code == 0  # disc not taken as done: redone
+    assert (out / "disc.png").is_file()
+    assert {name: os.stat(out / name).st_mtime_ns for name in before} == before
 
 
 @pytest.mark.parametrize("second", ["sub/ramp.jpg", "sub/RAMP.png", "ramp.png"])

@@ -71,7 +71,7 @@ def test_line_resumes_from_its_checkpoint(ramp_path, tmp_path):
     ("args", "message"),
     [
         (["-M", 3], "at least 4 vertices"),
-        (["-M", 100, "--length", -5], "length must be a positive number"),
+        (["-M", 100, "--length", -5], "--length must be in [16, "),
         (["-M", 100, "-o", "x.geojson"], "GeoJSON output is for sphere points"),
         (["-M", 100, "--epsilon", 0], "epsilon must be"),
     ],

@@ -8,7 +8,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.commit import check_writable
+from ..io.commit import check_folder, check_writable
 from .defaults import INITS
 from .recipes import torus_recipe
 from .torus import torus
@@ -90,9 +90,10 @@ batch.params.extend(torus_params())
 
 
 def plan(inputs, options):
-    """The batch's jobs, every file and option checked before any work; makes the output folder."""
-    from ..batch import parse_formats, plan_batch
+    """The batch's jobs, every option, file and output checked before any work; makes the output folder."""
+    from ..batch import expand_images, is_done, parse_formats, plan_batch, scheduler_address
     from ..halftone import check_integer
+    from ..pipelines.image import check_recipe
 
     if options["init"] not in INITS:
         raise StippleError(f"--init for a batch must be one of {', '.join(INITS)}, not {options['init']!r}")
@@ -102,14 +103,21 @@ def plan(inputs, options):
     if options["order"] == "progressive":
         raise StippleError("--order progressive is for stipple torus, one image at a time; use --order here")
     formats = parse_formats(options["formats"])
+    if options["scheduler"] is not None:
+        scheduler_address(options["scheduler"])
     recipe = torus_recipe(options)
+    check_recipe(recipe)
     out_dir = options["out_dir"]
-    jobs = plan_batch(inputs, out_dir, formats, recipe)
+    jobs = plan_batch(expand_images(inputs), out_dir, formats, recipe)
     try:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as error:
         raise StippleError(f"{out_dir}: cannot make the output folder ({error.strerror or error})") from None
-    check_writable(os.path.join(out_dir, "stipple-batch.check"))
+    check_folder(out_dir)
+    for job in jobs:
+        if options["force"] or not is_done(job):
+            for _, path in job.outputs:
+                check_writable(path)
     return jobs
 
 

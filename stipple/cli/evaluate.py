@@ -107,9 +107,13 @@ def evaluate(
         return
     if str(points_source).lower().endswith(".png"):
         picture = {"sigmas": sigmas, "colour": colour, "levels": levels, "inset": inset, "fs_dots": fs_dots}
-        evaluate_picture(points_source, input_source, json_path, picture, options, spectrum_path or bandwidth)
+        evaluate_picture(
+            points_source, input_source, json_path, picture, options, spectrum_path or bandwidth or as_line
+        )
         return
     try:
+        check_picture_options_absent(sigmas, colour, levels, inset, fs_dots)
+        check_builtin(input_source)
         options["lon0"] = check_longitude("lon0", lon0)
         check_extension("--json", json_path, ".json")
         check_extension("--spectrum", spectrum_path, ".png")
@@ -126,6 +130,7 @@ def evaluate(
             report = evaluation_report(
                 domain, points, names, input_source, bandwidth=bandwidth, kernel=kernel, as_line=as_line, **options
             )
+            warn_outside(report)
             files = []
             if spectrum_path is not None:
                 spectrum = report["spectrum"]
@@ -140,6 +145,43 @@ def evaluate(
         raise click.ClickException(str(error)) from None
 
 
+def check_builtin(input_source):
+    """Refuse an unknown ``builtin:NAME``, naming the built-in densities (rather than "no such file")."""
+    if input_source is None or not str(input_source).startswith("builtin:"):
+        return
+    from ..sphere import BUILTINS
+
+    name = str(input_source).partition(":")[2]
+    if name not in BUILTINS:
+        raise StippleError(f"unknown builtin {name!r}: choose from {', '.join('builtin:' + b for b in BUILTINS)}")
+
+
+def warn_outside(report):
+    """A warning on stderr when points lie outside the image they are measured against."""
+    count = report.get("points_outside", 0)
+    if count:
+        columns, rows = report["image_size"]
+        click.echo(
+            f"stipple: warning: {count} of {report['points']} points lie outside the {columns}×{rows} image "
+            "(made for another image?); the measures wrap them around",
+            err=True,
+        )
+
+
+def check_picture_options_absent(sigmas, colour, levels, inset, fs_dots):
+    """Refuse the options that measure a drawn picture when POINTS are given: they would be ignored."""
+    given = {
+        "--sigma": bool(sigmas),
+        "--colour/--gray": colour is not None,
+        "--levels": levels is not None,
+        "--inset": inset != 0,
+        "--floyd-steinberg": fs_dots is not None,
+    }
+    named = [name for name, present in given.items() if present]
+    if named:
+        raise StippleError(f"{', '.join(named)}: for a drawn PICTURE.png, not for points")
+
+
 def evaluate_picture(picture_source, input_source, json_path, picture, options, point_only):
     """``stipple evaluate PICTURE.png INPUT``: the picture measures as text, or JSON with ``--json``."""
     from ..measures.picture import SIGMAS
@@ -149,7 +191,7 @@ def evaluate_picture(picture_source, input_source, json_path, picture, options, 
         if input_source is None or options["uniform"]:
             raise StippleError("a picture is measured against the INPUT it was drawn from")
         if point_only:
-            raise StippleError("--spectrum and --bandwidth are for points, not pictures")
+            raise StippleError("--spectrum, --bandwidth and --line are for points, not pictures")
         check_extension("--json", json_path, ".json")
         levels = parse_levels(picture["levels"])
         transfer = {"invert": options["invert"], "gamma": options["gamma"], "value_range": options["value_range"]}

@@ -9,6 +9,9 @@ from .defaults import LINE_ITERATIONS
 from .options import common_options, is_default, resolve_input, without
 from .supervise import finish, guarded_files, supervised, write_outputs
 
+# How the line's settings are spelt in messages: the options typed.
+OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
+
 
 @click.command()
 # The line is drawn black on white with one pen: the dot options and the dots' near field would do nothing.
@@ -25,10 +28,12 @@ from .supervise import finish, guarded_files, supervised, write_outputs
 @click.pass_context
 def line(ctx, image, **options):
     """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
+    from ..halftone import check_count
     from ..io.commit import output_format
     from ..io.images import load_input
     from ..io.units import parse_length
     from ..line import line_points
+    from ..line.problem import line_settings
     from ..pipelines.inputs import read_torus_init
     from ..pipelines.outputs import line_files
 
@@ -45,6 +50,8 @@ def line(ctx, image, **options):
             weights = load_input(
                 image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
             )
+            check_count(options["n_points"])
+            line_settings(weights, options["n_points"], options["length"], options["bandwidth"], OPTION_NAMES)
             init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
             result, stopped_by = solve_line(weights, options, init)
             points = line_points(result.points)

@@ -33,6 +33,8 @@ def check_writable(path):
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    if not os.stat(directory).st_mode & 0o222:  # refused by its mode, as a read-only file is, even for root
+        raise StippleError(f"{path}: not writable (the folder {directory} is read-only)")
     if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
         raise StippleError(f"{path}: is read-only; make it writable or choose another name")
     try:
@@ -40,6 +42,19 @@ def check_writable(path):
             pass
     except OSError as error:
         raise StippleError(f"{path}: not writable ({error.strerror})") from None
+
+
+def check_folder(directory):
+    """Raise, naming ``directory``, unless it is a folder that can take new files."""
+    if not os.path.isdir(directory):
+        raise StippleError(f"{directory}: is not a folder")
+    if not os.stat(directory).st_mode & 0o222:
+        raise StippleError(f"{directory}: the output folder is read-only; make it writable or choose another")
+    try:
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as error:
+        raise StippleError(f"{directory}: the output folder is not writable ({error.strerror})") from None
 
 
 def atomic_write(path, data):

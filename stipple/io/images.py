@@ -201,11 +201,34 @@ def stretch_levels(gray, levels):
     linearly, clipped; unchanged for None (see ``load_density``)."""
     if levels is None:
         return gray
-    black, white = np.percentile(gray, [0.5, 99.5]) if levels == "auto" else levels
-    if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
-        what = "the image has one gray value" if levels == "auto" else f"not {black:g},{white:g}"
-        raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1 ({what})")
+    if levels == "auto":
+        black, white = np.percentile(gray, [0.5, 99.5])
+        if not black < white:
+            raise StippleError(
+                f"--levels auto: the image has one gray value ({black:.3g}) at its 0.5th and 99.5th percentiles; "
+                "nothing to stretch"
+            )
+    else:
+        black, white = check_levels(levels)
     return np.clip((gray - black) / (white - black), 0.0, 1.0)
+
+
+def check_levels(levels):
+    """``levels`` (None, "auto" or ``(black, white)`` with ``0 <= black < white <= 1``), checked."""
+    if levels is None or levels == "auto":
+        return levels
+    black, white = (float(value) for value in levels)
+    if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
+        raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1, not {black:g},{white:g}")
+    return black, white
+
+
+def check_load_options(*, invert=False, gamma=1.0, value_range=None, levels=None):
+    """Raise if a setting of ``load_density`` is out of range (checked before any file is read)."""
+    _check_gamma(gamma)
+    if value_range is not None:
+        check_range(value_range)
+    check_levels(levels)
 
 
 def image_density(image, *, invert=False, gamma=1.0, levels=None, name="input"):
@@ -237,6 +260,10 @@ def _check_gamma(gamma):
 def _transfer(values, invert, gamma):
     """``values`` (dark = 1) as the density: inverted if asked, then to the power ``gamma``."""
     density = 1.0 - values if invert else values
+    if invert and not np.any(density > 0):
+        raise StippleError(
+            "the image is blank under --invert (all black): --invert places dots on its light parts, and it has none"
+        )
     return density**gamma if gamma != 1.0 else density
 
 
@@ -252,11 +279,26 @@ def load_colour(source, name=None):
         raise StippleError(f"{name}: file is empty")
     if data.startswith(NPY_MAGIC):
         raise StippleError(f"{name}: colour separation needs an image (PNG, JPEG, ...), not a .npy array")
-    image = open_image(data, name, "not a supported image, or truncated")
-    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
-    colour = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    colour = image_colour(open_image(data, name, "not a supported image, or truncated"), name)
     check_grid(colour[..., 0], name)
     return colour
+
+
+# Modes whose values Pillow's ``convert("RGBA")`` would clip or truncate to 8 bits: read as gray, then spread.
+_DEEP_GRAY = ("I;16", "I;16B", "I;16L", "I;16N", "I", "F", "L", "1")
+
+
+def image_colour(image, name="input"):
+    """Red, green and blue in [0, 1] of a decoded PIL image, ``(H, W, 3)``, alpha composited on white.
+
+    The one colour reader: gray images of every depth (8- and 16-bit, 32-bit integer, float) give three equal
+    channels holding exactly ``load_gray``'s values, so that a picture has the same tone on the gray and the
+    colour paths; RGB(A), palettes and the rest are decoded by Pillow.
+    """
+    if image.mode in _DEEP_GRAY:
+        return np.repeat(_gray_values(image, name)[..., None], 3, axis=2)
+    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+    return rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
 
 
 def load_input(source, **options):

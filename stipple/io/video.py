@@ -20,7 +20,7 @@ from PIL import Image
 from ..errors import StippleError
 from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import image_density, load_colour, load_density
+from .images import image_colour, image_density, load_colour, load_density
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
@@ -186,8 +186,7 @@ def _decoded(image, name, invert, gamma, levels, colour=False):
     """A decoded frame's density, or its colours in [0, 1] alpha composited on white (as ``load_colour``)."""
     if not colour:
         return image_density(image, invert=invert, gamma=gamma, levels=levels, name=name)
-    rgba = np.asarray(image, dtype=np.float64) / 255.0
-    return rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    return image_colour(image, name)
 
 
 def _reason(error):
@@ -214,7 +213,8 @@ def check_frame_pattern(path):
     extension = os.path.splitext(text)[1].lower()
     if extension not in PATTERN_EXTENSIONS:
         raise StippleError(f"{text}: frame patterns write {' or '.join(PATTERN_EXTENSIONS)} files")
-    if len(_FIELD.findall(text)) != 1 or text.count("%") != 1:
+    bare = text.replace("%%", "")  # '%%' is a literal '%'
+    if len(_FIELD.findall(bare)) != 1 or bare.count("%") != 1:
         raise StippleError(
             f"{text}: a video writes one {extension[1:].upper()} per frame: the name needs one %d (or %04d) for "
             "the frame number, e.g. frames/%04d.png"
@@ -224,7 +224,8 @@ def check_frame_pattern(path):
 
 def frame_path(pattern, index):
     """The file of frame ``index`` for a frame pattern (``frames/%04d.png``, 7 -> ``frames/0007.png``)."""
-    return _FIELD.sub(lambda match: format(index, f"{match.group(1) or ''}d"), pattern)
+    number = lambda match: format(index, f"{match.group(1) or ''}d")  # noqa: E731
+    return "%".join(_FIELD.sub(number, part) for part in pattern.split("%%"))
 
 
 def plan_outputs(outputs):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..checks import check_integer
 from ..errors import StippleError
-from ..halftone import MAX_BANDWIDTH, Problem, check_count, check_positive, darkest_level
+from ..halftone import MAX_BANDWIDTH, Problem, check_count, darkest_level
 from ..manifolds import Rectangle
 from ..nearfield import NearField, TorusPairs
 from ..objective import SumObjective
@@ -134,6 +134,50 @@ def default_line_bandwidth(length, weights):
     return min(int(2 * np.ceil(MODES_PER_SPACING / spacing / 2)), MAX_BANDWIDTH)
 
 
+def line_settings(weights, n_vertices, length=None, bandwidth=None, names=None):
+    """``(length, bandwidth)`` of a line, given or by default, checked so that the padded torus's grid stays
+    bounded: ``length`` in ``length_bounds`` (the blank margin at most ``MAX_MARGIN_SIDES`` times the image's
+    longer side), ``bandwidth`` even in [2, ``bandwidth_limit``] (the padded bandwidth at most ``MAX_BANDWIDTH``).
+    ``names`` spell the two settings in messages (the command line's options; default "length", "bandwidth")."""
+    weights = check_weights(weights)
+    names = {"length": "length", "bandwidth": "bandwidth", **(names or {})}
+    low, high = length_bounds(weights.shape)
+    if length is None:
+        length = float(np.clip(default_length(n_vertices, weights), low, high))
+    elif not (isinstance(length, (int, float, np.number)) and np.isfinite(length) and low <= length <= high):
+        rows, columns = weights.shape
+        raise StippleError(
+            f"{names['length']} must be in [{low:.4g}, {high:.4g}] pixels for a {columns}×{rows} image (shorter, the "
+            f"blank margin would be over {MAX_MARGIN_SIDES} times the image; longer, strokes under "
+            f"1/{MAX_LENGTH_COVERAGE} px apart), not {length!r}"
+        )
+    limit = bandwidth_limit(length, weights.shape)
+    if bandwidth is None:
+        return float(length), min(default_line_bandwidth(length, weights), limit)
+    bandwidth = check_integer(names["bandwidth"], bandwidth, 2, limit, even=True)
+    return float(length), bandwidth
+
+
+# The blank margin around the image is at most this many times the image's longer side (a shorter --length is
+# refused: it would grow the padded grid without bound); a line at most MAX_LENGTH_COVERAGE times the image's area
+# (strokes 1/16 px apart).
+MAX_MARGIN_SIDES, MAX_LENGTH_COVERAGE = 4, 16
+
+
+def length_bounds(shape):
+    """The least and the largest curve length in pixels of a ``shape`` image (see ``line_settings``)."""
+    rows, columns = shape
+    return MARGIN_SPACINGS * rows * columns / (
+        MAX_MARGIN_SIDES * max(rows, columns)
+    ), MAX_LENGTH_COVERAGE * rows * columns
+
+
+def bandwidth_limit(length, shape):
+    """The largest even bandwidth whose padded bandwidth (the margin adds modes) stays at most ``MAX_BANDWIDTH``."""
+    longest = max(shape) + 2 * blank_margin(length, shape)
+    return max(2, int(MAX_BANDWIDTH * max(shape) / longest) // 2 * 2)
+
+
 def blank_margin(length, shape):
     """Pixels of white margin around the image: ``MARGIN_SPACINGS`` mean stroke spacings ``W H / L``, at least 2."""
     rows, columns = shape
@@ -188,8 +232,7 @@ def line_problem(
     n_vertices = check_count(n_vertices)
     if n_vertices < MIN_CURVE_VERTICES:
         raise StippleError(f"a closed curve needs at least {MIN_CURVE_VERTICES} vertices, not {n_vertices}")
-    length = float(check_positive("length", default_length(n_vertices, weights) if length is None else length))
-    bandwidth = default_line_bandwidth(length, weights) if bandwidth is None else bandwidth
+    length, bandwidth = line_settings(weights, n_vertices, length, bandwidth)
     margin = blank_margin(length, weights.shape)
     padded = np.pad(weights, margin)
     longest = max(padded.shape)

@@ -60,7 +60,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
         )
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
         problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10, bandwidth_factor=1.0)
-        return evaluate_torus(problem, unit, weights)
+        return {**evaluate_torus(problem, unit, weights), **outside(points, weights.shape)}
     density = sphere_density(
         input_source,
         uniform=options["uniform"],
@@ -71,6 +71,15 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     )
     problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
     return evaluate_sphere(problem, points, density)
+
+
+def outside(pixels, shape):
+    """``{"points_outside": count, "image_size": [W, H]}``: how many pixel positions lie outside the image (points
+    made for another image, whose positions the torus would wrap silently)."""
+    rows, columns = shape[:2]
+    pixels = np.asarray(pixels, dtype=np.float64)
+    beyond = (pixels < 0).any(axis=1) | (pixels[:, 0] > columns) | (pixels[:, 1] > rows)
+    return {"points_outside": int(beyond.sum()), "image_size": [int(columns), int(rows)]}
 
 
 def evaluate_layers(pixels, names, input_source, bandwidth, options):
@@ -90,6 +99,7 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     report = evaluate_torus(
         torus_problem(union, len(unit), bandwidth, epsilon=1e-10, bandwidth_factor=1.0), unit, union
     )
+    report.update(outside(pixels, rgb.shape))
     report["classes"] = []
     for layer in layers:
         chosen = names == layer.name
@@ -139,6 +149,16 @@ def format_report(report):
     return "\n".join(lines)
 
 
+def _check_sigmas(sigmas, shape):
+    """Each blur ``sigma`` in (0, the picture's longer side] input pixels (a wider blur measures nothing and its
+    kernel would outgrow memory)."""
+    for sigma in sigmas:
+        if not (np.isfinite(sigma) and 0 < sigma <= max(shape)):
+            raise StippleError(
+                f"sigma must be in (0, {max(shape)}] input pixels (the input's longer side), not {sigma:g}"
+            )
+
+
 def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
     """The picture measures (``stipple.picture``) of a drawn PNG against the input it was drawn from.
 
@@ -159,6 +179,7 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
         density = load_density(io.BytesIO(data), name=name, **options)
         reference = density if options.get("invert") else 1.0 - density
     _check_aspect(drawn.shape, reference.shape, picture_source, input_source)
+    _check_sigmas(sigmas, reference.shape[:2])
     report = {
         "picture": str(picture_source),
         "input": name,

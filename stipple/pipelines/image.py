@@ -3,10 +3,12 @@ load -> problem -> solve -> order -> drawing -> each output's bytes."""
 
 from dataclasses import dataclass, field
 
-from ..halftone import run
-from ..io.images import load_input
+from ..errors import StippleError
+from ..halftone import check_bandwidth, check_count, check_epsilon, check_run_options, check_threads, run
+from ..io.images import check_load_options, load_input
 from ..io.png import check_png_outputs
 from ..torus import torus_problem
+from ..transforms import BACKENDS
 from .inputs import read_torus_init
 from .outputs import torus_files
 from .pen import counted_recipe, order_kind, ordered_points
@@ -109,3 +111,20 @@ def image_problem(weights, formats, recipe):
 
         return progressive_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
     return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
+
+
+def check_recipe(recipe):
+    """Raise if a setting of ``recipe`` is out of range, as its run would, before any image is read (so that a
+    batch refuses a bad option once, before any work)."""
+    check_load_options(**recipe.load)
+    problem = recipe.problem
+    check_count(problem.get("n_points"))
+    if problem.get("bandwidth") is not None:
+        check_bandwidth(problem["bandwidth"])
+    if problem.get("threads") is not None:
+        check_threads(problem["threads"])
+    if "epsilon" in problem:
+        check_epsilon(problem["epsilon"])
+    if problem.get("backend", BACKENDS[0]) not in BACKENDS:
+        raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {problem['backend']!r}")
+    check_run_options(**recipe.solve)
