@@ -5,7 +5,7 @@
 For each image and M:
 
 * ``after``: what ``stipple torus`` draws by default: positions from ``stipple.halftone_torus`` (defaults), then
-  each dot's radius set after the fact by ``stipple.drawing.tone_dots`` (Voronoi-cell darkness, union-of-discs
+  each dot's radius set after the fact by ``stipple.render.dots.tone_dots`` (Voronoi-cell darkness, union-of-discs
   model, render-compare-correct passes, dots kept on the canvas);
 * ``joint``: ``stipple.discs.optimise_discs`` from those positions (its defaults: every disc at the one tone
   radius, 200 CG iterations at most), positions and disc areas optimised together; drawn with its own radii;
@@ -13,7 +13,7 @@ For each image and M:
   twice, the drawing does not; this is what a default could draw).
 
 Each picture is the union of its discs (``stipple.tone.raster.union_coverage_image``, antialiased on the input
-grid), luminance ``1 - coverage``, measured with ``stipple.picture.measure_picture`` against ``1 - w`` at
+grid), luminance ``1 - coverage``, measured with ``stipple.measures.picture.measure_picture`` against ``1 - w`` at
 sigma = 2 and 4 input pixels. Seconds: the halftone, the radii, the joint CG. Prints a markdown table.
 """
 

@@ -3,7 +3,7 @@
 For each image: ``stipple.draw_line`` with M vertices, and ``stipple torus`` dots (M of them, CLI defaults) toured
 by LKH-3 (``elkai``, an optional benchmark dependency: ``pip install elkai``). Both closed lines are drawn 1 px
 wide at the image's resolution, blurred (sigma 2 and 4 px) and scaled by least squares onto the blurred density
-(``stipple.evaluate.fitted_similarity``). Prints one JSON object per image, with the line's share of vertices
+(``stipple.measures.evaluate.fitted_similarity``). Prints one JSON object per image, with the line's share of vertices
 within one stroke spacing of each edge against the image's share of darkness there.
 
     python bench/line_vs_tsp.py [IMAGE ...] [-M 20000] [--size 256] [--iterations 400] [--png DIR]

@@ -2,7 +2,7 @@
 
 For every input of a set (``default`` or ``holdout``, made from ``samples/``-style data and formulas into
 ``--out``), runs ``stipple torus|sphere INPUT -M M -o points.csv`` (plus ``--range 0 1`` for ``.npy`` maps, so
-that their background is kept; nothing else), times it, evaluates the points with ``stipple.evaluate`` and
+that their background is kept; nothing else), times it, evaluates the points with ``stipple.measures.evaluate`` and
 writes ``summary-SET.json`` and a zoomed crop ``NAME-crop.png`` of the densest region (black discs on white).
 
     python bench/quality.py [--set default|holdout] [--only NAME] [--timeout 300] [--stipple CMD] [--out DIR]

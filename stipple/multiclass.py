@@ -104,7 +104,7 @@ class MulticlassObjective:
 class MulticlassProblem(Problem):
     """A ``Problem`` whose points are classes one after another; ``classes`` are each class's own problem.
 
-    ``discrepancy`` is the union's (``stipple.evaluate`` measures the union on this problem, and a class
+    ``discrepancy`` is the union's (``stipple.measures.evaluate`` measures the union on this problem, and a class
     ``c`` on ``classes[c]`` with the points ``points[slices[c]]``).
     """
 

@@ -1,7 +1,7 @@
 """Spreading the closest neighbours at the end of a run: a cheap step for the nearest-neighbour ratio's low tail.
 
 The density-scaled run (``stipple.torus``) settles the energy and the picture in a few dozen iterations, but the
-1st percentile of the nearest-neighbour ratio (``stipple.evaluate.torus_clumps``: the distance to the nearest
+1st percentile of the nearest-neighbour ratio (``stipple.measures.evaluate.torus_clumps``: the distance to the nearest
 dot over the hexagonal spacing of the density in the dot's own pixel) rises slowly. On the portrait those dots
 are not close pairs: most sit in a light pixel next to a darker one, and their nearest neighbour, on the dark
 side, is about one of its own spacings away (the neighbour's spacing is about 0.66 of theirs; only one in five
@@ -47,7 +47,7 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     positive density), at least ``SPREAD_TARGET``.
 
     Distances are periodic, in pixels (``points`` in unit coordinates, ``weights`` the density on the ``(H, W)``
-    pixel grid, as in ``stipple.evaluate.torus_neighbours``). Within a pass all dots move at once, each by at
+    pixel grid, as in ``stipple.measures.evaluate.torus_neighbours``). Within a pass all dots move at once, each by at
     most ``target / 2`` of its spacing; dots in pixels of zero density never move. Returns the new points (unit
     coordinates, in ``[0, 1)``) and the number of dots moved in the first pass.
     """

@@ -1,4 +1,4 @@
-"""Picture measures (stipple.picture, ``stipple evaluate PICTURE.png INPUT``) against exact cases."""
+"""Picture measures (stipple.measures.picture, ``stipple evaluate PICTURE.png INPUT``) against exact cases."""
 
 import json
 

@@ -1,6 +1,6 @@
-"""Evaluation reports (``stipple evaluate``): which measures of ``stipple.evaluate`` apply to which kind of point
-file (torus dots, sphere points, layered inks, one line); a drawn picture's measures (``stipple.picture``); and the
-reports' text form."""
+"""Evaluation reports (``stipple evaluate``): which measures of ``stipple.measures.evaluate`` apply to which kind
+of point file (torus dots, sphere points, layered inks, one line); a drawn picture's measures
+(``stipple.measures.picture``); and the reports' text form."""
 
 import io
 import sys
@@ -160,7 +160,7 @@ def _check_sigmas(sigmas, shape):
 
 
 def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
-    """The picture measures (``stipple.picture``) of a drawn PNG against the input it was drawn from.
+    """The picture measures (``stipple.measures.picture``) of a drawn PNG against the input it was drawn from.
 
     ``colour``: CIELAB measures (True), luminance measures (False) or, None, colour exactly when the input is an
     image with chroma (mean C*ab above ``GRAY_CHROMA``). ``options`` are the density's transfer as for the run

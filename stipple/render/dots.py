@@ -22,7 +22,7 @@ class Dots:
     """One layer of dots in canvas user units.
 
     ``radii`` are per dot; a foreshortened dot is an ellipse whose axis along ``angle`` (radians, canvas
-    coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.plotter``), if any.
+    coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.render.pen``), if any.
     """
 
     name: str

@@ -1,6 +1,6 @@
 """Tone-true dot radii: the drawn ink, as a viewer sees it, has the image's darkness where each dot sits.
 
-A dot of the same radius everywhere, capped so that no two dots touch (``stipple.drawing``), covers at most
+A dot of the same radius everywhere, capped so that no two dots touch (``stipple.render.dots``), covers at most
 about 73 % of the paper, so dark tones come out gray. Here each dot gets its own radius: dots grow, and may
 overlap, where the image is dark, and shrink where it is light.
 
@@ -33,7 +33,7 @@ print the image's colour when the inks are laid independently of each other (for
 alone, ``c = 1 - R``, exactly, however the dots overlap). Dots of a joint stipple are neither apart nor
 independent, so ``tone_radii_layers`` with the inks' colours corrects against the drawn colour itself.
 
-``fit_inside`` keeps every dot on the canvas without moving the others (``stipple.drawing.inset`` shrinks the
+``fit_inside`` keeps every dot on the canvas without moving the others (``stipple.render.dots.inset`` shrinks the
 whole drawing, a misregistration of up to one radius that a blurred comparison counts as tone error).
 
 Modules: ``radii`` (the radii and ``fit_inside``), ``raster`` (exact drawing of discs), ``inks`` (separations

@@ -247,7 +247,7 @@ def fit_inside(layers, size, *, how="clamp", margin=None):
         "clamp": each dot that would cross an edge moves inwards just enough (less than its radius); every
         other dot stays where it was placed, so the picture stays registered with the image. "scale": the
         centres are mapped affinely onto the canvas shrunk by ``margin`` on every side, as
-        ``stipple.drawing.inset`` does, and the radii scaled by the same factor, so that the dots' ink keeps its
+        ``stipple.render.dots.inset`` does, and the radii scaled by the same factor, so that the dots' ink keeps its
         share (moving the centres only packs them denser: darker by about ``4 margin / width``).
     margin : float, optional
         "scale" only: the inset on every side (>= 0; default: the largest radius).
@@ -256,7 +256,7 @@ def fit_inside(layers, size, *, how="clamp", margin=None):
     -------
     tuple
         ``(layers, margin)``: the centres and radii per layer, and the margin used ("clamp": 0; "scale": at most
-        a quarter of the shorter side, as in ``stipple.drawing.inset``).
+        a quarter of the shorter side, as in ``stipple.render.dots.inset``).
     """
     width, height = check_size(size)
     checked = [check_discs(centres, radii) for centres, radii in layers]
