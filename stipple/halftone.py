@@ -11,8 +11,7 @@ from . import allocator
 from .checks import check_integer, check_positive
 from .errors import StippleError
 from .multilevel import coarse_to_fine
-from .optimize import BETAS, OptimizeResult, initial_state, minimize
-from .spread import SPREAD_ITERATIONS
+from .optimize import BETAS, OptimizeResult, initial_state, minimize, time_left
 
 MAX_POINTS = 20_000_000
 MAX_BANDWIDTH = 8192
@@ -267,7 +266,7 @@ def run(
     if spreads and result.status not in ("stopped", "time_limit"):
         result = spread_close_dots(problem, result, callback=callback)
     if corrects and result.iterations > 0 and result.status != "stopped":
-        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        remaining = time_left(time_limit, started)
         result = correct_low_frequencies(problem, result, remaining, callback)
     return result
 
@@ -289,6 +288,10 @@ def _start_state(problem, init, seed, levels, time_limit, callback):
     state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
     state.rng_state = json.dumps(rng.bit_generator.state)
     return state
+
+
+# CG iterations after the spread step (``stipple.spread``), before the low-frequency correction.
+SPREAD_ITERATIONS = 3
 
 
 def spread_close_dots(problem, result, callback=None, iterations=SPREAD_ITERATIONS):
@@ -329,7 +332,7 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
     points, corrections, summary = result.points, [], []
     for factor, iterations in levels:
         coarse = problem.coarse(even_at_least_2(_correction_bandwidth(problem) / factor))
-        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        remaining = time_left(time_limit, started)
         correction = minimize(
             coarse.objective,
             coarse.manifold,

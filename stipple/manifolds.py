@@ -6,6 +6,8 @@ in [0, 1)² on the torus and ``(M, 3)`` unit vectors on the sphere; tangent vect
 
 import numpy as np
 
+from .sampling import pixel_indices
+
 
 class Torus:
     """Flat torus [0, 1)² whose axes have physical lengths ``scale`` (``(W/L, H/L)`` for a W×H image).
@@ -68,7 +70,6 @@ class ScaledTorus(Torus):
         self.field = np.asarray(field, dtype=float)
         if self.field.ndim != 2 or not np.all(np.isfinite(self.field)) or not np.all(self.field > 0):
             raise ValueError("field must be a 2-D array of positive numbers")
-        self._flat = self.field.ravel()
         self._cached = None
 
     def factor(self, points):
@@ -76,13 +77,7 @@ class ScaledTorus(Torus):
         which CG asks about several times per iteration (read-only)."""
         if self._cached is not None and self._cached[0] is points:
             return self._cached[1]
-        rows, columns = self.field.shape
-        x, y = points[:, 0], points[:, 1]
-        if x.min(initial=0.0) < 0 or max(x.max(initial=0.0), y.max(initial=0.0)) >= 1 or y.min(initial=0.0) < 0:
-            x, y = np.mod(x, 1.0), np.mod(y, 1.0)
-        cells = np.minimum((y * rows).astype(np.intp), rows - 1) * columns
-        cells += np.minimum((x * columns).astype(np.intp), columns - 1)
-        values = self._flat[cells]
+        values = self.field[pixel_indices(points, self.field.shape)]
         values.flags.writeable = False
         self._cached = (points, values)
         return values

@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .optimize import minimize
+from .optimize import minimize, time_left
 from .sampling import hilbert_index
 
 # Dots per level: each coarser level has 1/RATIO of the dots of the next (4: half the spacing, half the N).
@@ -155,7 +155,7 @@ def coarse_to_fine(problem, rng, *, time_limit=None, callback=None, iterations=L
     for count in counts:
         level = problem.level(count)
         points = level.stratified(rng, count) if points is None else problem.split(points, count)
-        remaining = None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+        remaining = time_left(time_limit, started)
         result = minimize(
             level.objective,
             level.manifold,

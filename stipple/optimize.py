@@ -167,6 +167,12 @@ def _hestenes_stiefel(objective, manifold, points, gradient, moved, moved_gradie
     return -gradient, (steepest, steepest)
 
 
+def time_left(time_limit, started):
+    """Seconds left of ``time_limit`` since ``started`` (a ``time.perf_counter()`` reading), at least 0; None
+    without a limit."""
+    return None if time_limit is None else max(time_limit - (time.perf_counter() - started), 0.0)
+
+
 def minimize(
     objective,
     manifold,

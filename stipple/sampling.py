@@ -3,6 +3,25 @@
 import numpy as np
 
 
+def pixel_positions(points, shape):
+    """``points`` (unit coordinates, wrapped) in pixels ``(x, y)`` of an image of ``shape = (H, W)``, each in
+    ``[0, W) x [0, H)``."""
+    rows, columns = shape
+    size = np.array([columns, rows], dtype=float)
+    pixels = np.mod(points * size, size)
+    pixels[pixels >= size] = 0.0  # np.mod(-1e-17, 1) == 1.0
+    return pixels
+
+
+def pixel_indices(points, shape):
+    """``(row, column)`` of the pixel of an image of ``shape = (H, W)`` that contains each of ``points`` (unit
+    coordinates, wrapped)."""
+    rows, columns = shape
+    column = np.minimum((np.mod(points[:, 0], 1.0) * columns).astype(np.intp), columns - 1)
+    row = np.minimum((np.mod(points[:, 1], 1.0) * rows).astype(np.intp), rows - 1)
+    return row, column
+
+
 def hilbert_index(x, y, order=16):
     """Index along the Hilbert curve of the ``2^order`` grid of integer cells ``(x, y)``."""
     side = 1 << order

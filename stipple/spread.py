@@ -16,6 +16,9 @@ iterations then smooth the disturbance (``stipple.halftone.run``).
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .halftone import hexagonal_spacing
+from .sampling import pixel_indices, pixel_positions
+
 # A dot is spread when its nearest-neighbour distance is below this percentile of all dots' ratios to the
 # hexagonal spacing of the density in their pixels, and at least this fraction of its spacing (the portrait after
 # 100 iterations: p01 0.722; fixed targets 0.75/0.78/0.8 raised it to 0.738/0.753/0.761 after 3 CG iterations and
@@ -24,19 +27,14 @@ SPREAD_PERCENTILE = 5
 SPREAD_TARGET = 0.78
 # Passes of the step (each searches the nearest neighbours again): one pass leaves half of what three gain.
 SPREAD_PASSES = 3
-# CG iterations after the step, before the low-frequency correction.
-SPREAD_ITERATIONS = 3
 
 
 def hexagonal_spacing_at(points, weights):
     """Per dot (unit coordinates), the spacing in pixels of a hexagonal packing at the density of its pixel
     (``M w / sum(w)`` dots per pixel; infinite in pixels of zero density)."""
-    rows, columns = weights.shape
-    column = np.minimum((np.mod(points[:, 0], 1.0) * columns).astype(np.intp), columns - 1)
-    row = np.minimum((np.mod(points[:, 1], 1.0) * rows).astype(np.intp), rows - 1)
-    density = len(points) * weights[row, column] / weights.sum()
+    density = len(points) * weights[pixel_indices(points, weights.shape)] / weights.sum()
     with np.errstate(divide="ignore"):
-        return np.sqrt(2 / (np.sqrt(3) * density))
+        return hexagonal_spacing(density, 1.0)
 
 
 def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
@@ -53,8 +51,7 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     """
     rows, columns = weights.shape
     size = np.array([columns, rows], dtype=float)
-    pixels = np.mod(points * size, size)
-    pixels[pixels >= size] = 0.0
+    pixels = pixel_positions(points, weights.shape)
     spacing = hexagonal_spacing_at(points, weights)
     finite = np.isfinite(spacing)
     moved = 0

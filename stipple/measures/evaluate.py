@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 
 from ..design import fibonacci_lattice
 from ..halftone import hexagonal_spacing
+from ..sampling import pixel_indices, pixel_positions
 
 BLURS = (1.0, 2.0, 4.0)
 # E|psi_l(X)|^2 as it enters sums whose weights depend on the degree only: 1 on the torus (|psi| = 1); on the
@@ -195,13 +196,9 @@ def torus_neighbours(points, weights):
         ``(distance, spacing, w)``; the local density is ``M w / sum(w)`` dots per pixel.
     """
     rows, columns = weights.shape
-    size = np.array([columns, rows], dtype=float)
-    pixels = np.mod(points * size, size)
-    pixels[pixels >= size] = 0.0  # np.mod(-1e-17, 1) == 1.0
-    distances, _ = cKDTree(pixels, boxsize=size).query(pixels, k=2)
-    column = np.minimum((np.mod(points[:, 0], 1) * columns).astype(int), columns - 1)
-    row = np.minimum((np.mod(points[:, 1], 1) * rows).astype(int), rows - 1)
-    local = weights[row, column]
+    pixels = pixel_positions(points, weights.shape)
+    distances, _ = cKDTree(pixels, boxsize=np.array([columns, rows], dtype=float)).query(pixels, k=2)
+    local = weights[pixel_indices(points, weights.shape)]
     return distances[:, 1], local_spacing(len(points) * local / weights.sum()), local
 
 
