@@ -1,6 +1,7 @@
 """Halftoning on the torus: an image's exact Fourier coefficients, the ball-discrepancy kernel, sampling."""
 
 import os
+from functools import partial
 
 import numpy as np
 
@@ -201,6 +202,8 @@ def torus_problem(
     )
     objective, discrepancy = torus_objective(weights, n_points, bandwidth, fourier, hessian, near_field)
     manifold = ScaledTorus(scale, stiffness_field(weights, n_points)) if precondition else Torus(scale)
+    # The same image with other counts or bandwidths: the correction's coarse problems and the start's levels.
+    same = partial(torus_problem, weights, backend=backend, threads=threads, epsilon=epsilon, precondition=precondition)
     return Problem(
         domain="torus",
         manifold=manifold,
@@ -212,27 +215,8 @@ def torus_problem(
         stratified=lambda rng, count: stratified_sample(weights, rng, count),
         settle=DEFAULT_SETTLE if precondition else FLAT_SETTLE,
         correction_bandwidth=min(correction_bandwidth, MAX_BANDWIDTH),
-        coarse=lambda coarse_bandwidth: torus_problem(
-            weights,
-            n_points,
-            coarse_bandwidth,
-            backend=backend,
-            threads=threads,
-            epsilon=epsilon,
-            near_field=False,
-            precondition=precondition,
-        ),
-        level=lambda count: torus_problem(
-            weights,
-            count,
-            backend=backend,
-            threads=threads,
-            epsilon=epsilon,
-            hessian=hessian,
-            near_field=near_field,
-            precondition=precondition,
-            bandwidth_factor=bandwidth_factor,
-        ),
+        coarse=lambda coarse_bandwidth: same(n_points, coarse_bandwidth, near_field=False),
+        level=lambda count: same(count, hessian=hessian, near_field=near_field, bandwidth_factor=bandwidth_factor),
         split=lambda points, count: split_points(weights, points, count, scale, fourier.threads),
         spread=(lambda points: spread_close(points, weights)) if precondition else None,
         settings={
