@@ -134,9 +134,7 @@ def case(problem, raw_seconds, name, backend, threads, iterations):
         "N": problem.bandwidth,
         "backend": backend,
         "threads": threads,
-        "epsilon": problem.discrepancy.fourier.epsilon
-        if backend == "ducc0.sht"
-        else problem.discrepancy.fourier.nufft.epsilon,
+        "epsilon": problem.discrepancy.fourier.epsilon,
         "iterations_timed": iterations,
         "seconds_per_iteration": seconds,
         "seconds_per_iteration_at_start": start_seconds,

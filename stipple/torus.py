@@ -35,6 +35,21 @@ from .transforms import BACKENDS, TorusFourier, centred_modes, make_nufft
 # Transform accuracy: at M = 10^6 the energy after 8 CG iterations moved by 4e-9 of itself against 1e-9, at
 # 10 % less time per iteration (README, Defaults).
 DEFAULT_EPSILON = 1e-7
+# Accuracy asked of the derivatives' transforms by ``stipple torus`` (gradient and Hessian forms, in single precision:
+# ``stipple.transforms.precision``); the residual keeps ``epsilon``. Measured on the portrait and at M = 200000
+# after 40 iterations: the gradient within 1.4e-5 of the double-precision one, the Hessian form within 2e-8, the
+# same energies to 8 digits after 60 iterations (docs/performance.md).
+DERIVATIVE_EPSILON = 1e-4
+
+
+def derivative_accuracy(epsilon, derivative_epsilon=None):
+    """The derivatives' accuracy: ``derivative_epsilon`` (checked), never finer than ``epsilon``; default
+    ``epsilon``."""
+    if derivative_epsilon is None:
+        return epsilon
+    return max(check_epsilon(derivative_epsilon), epsilon)
+
+
 # The paper's Fig. 5.1 (M = 30150, N = 650 on a square): N = 4.02 / (hexagonal spacing of M dots).
 MODES_PER_SPACING = 4.02
 # Near-field radius times the bandwidth: eps = 3 / N (the smooth part's force error is ~0.7 % of the kernel's
@@ -168,6 +183,7 @@ def torus_problem(
     near_field=True,
     precondition=True,
     bandwidth_factor=SOLVE_BANDWIDTH_FACTOR,
+    derivative_epsilon=None,
 ):
     """The halftoning problem of ``weights`` (rows top to bottom, or an image file) with ``n_points`` dots on T².
 
@@ -176,8 +192,9 @@ def torus_problem(
     ``default_bandwidth`` itself. With ``precondition`` (default) CG works in the metric scaled by the
     density's ``stiffness_field``. The problem's ``level(count)`` is the same problem with ``count`` dots at its
     own default bandwidth and ``split(points, count)`` turns a level's points into ``count``
-    (``stipple.multilevel``), for the
-    coarse-to-fine start of ``run``.
+    (``stipple.multilevel``), for the coarse-to-fine start of ``run``. The residual's transforms have the accuracy
+    ``epsilon``, the derivatives' ``derivative_epsilon`` (``derivative_accuracy``; default ``epsilon``, and
+    ``DERIVATIVE_EPSILON`` for ``stipple torus``), kept by the levels and the coarse problems.
     """
     if isinstance(weights, (str, os.PathLike)):
         weights = load_density(weights)
@@ -196,14 +213,22 @@ def torus_problem(
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
     threads = default_threads() if threads is None else check_threads(threads)
     epsilon = check_epsilon(epsilon)
+    derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon)
     scale = torus_scale(weights.shape)
-    fourier = TorusFourier(
-        make_nufft(backend, tuple(n + 1 for n in axis_bandwidths(bandwidth, weights.shape)), epsilon, threads)
-    )
+    shape = tuple(n + 1 for n in axis_bandwidths(bandwidth, weights.shape))
+    fourier = TorusFourier(make_nufft(backend, shape, derivative_epsilon, threads), analysis_epsilon=epsilon)
     objective, discrepancy = torus_objective(weights, n_points, bandwidth, fourier, hessian, near_field)
     manifold = ScaledTorus(scale, stiffness_field(weights, n_points)) if precondition else Torus(scale)
     # The same image with other counts or bandwidths: the correction's coarse problems and the start's levels.
-    same = partial(torus_problem, weights, backend=backend, threads=threads, epsilon=epsilon, precondition=precondition)
+    same = partial(
+        torus_problem,
+        weights,
+        backend=backend,
+        threads=threads,
+        epsilon=epsilon,
+        precondition=precondition,
+        derivative_epsilon=derivative_epsilon,
+    )
     return Problem(
         domain="torus",
         manifold=manifold,

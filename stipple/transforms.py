@@ -22,6 +22,17 @@ from .parallel import map_blocks, sum_blocks, thread_pool
 
 BACKENDS = ("ducc0", "finufft")
 
+# Transforms asked for this accuracy or a coarser one run in single precision (float32 points, complex64 values):
+# both libraries reach it there, and their spreading and FFTs take about half the memory traffic.
+SINGLE_PRECISION_EPSILON = 1e-5
+
+
+def precision(epsilon):
+    """``(real dtype, complex dtype)`` of the transforms for ``epsilon``."""
+    if epsilon >= SINGLE_PRECISION_EPSILON:
+        return np.float32, np.complex64
+    return np.float64, np.complex128
+
 
 class Ducc0Nufft:
     """2-D NUFFT on [0, 1)² through ``ducc0.nufft`` (centred grid, periodicity 1)."""
@@ -36,12 +47,13 @@ class Ducc0Nufft:
         self.epsilon = epsilon
         self.threads = threads
         self.counts = {"type1": 0, "type2": 0, "set_points": 0}
+        self._real, self._complex = precision(epsilon)
         self._plan = None
 
     def set_points(self, points):
         self._plan = self._ducc0.nufft.plan(
             nu2u=True,
-            coord=np.ascontiguousarray(points, dtype=np.float64),
+            coord=np.ascontiguousarray(points, dtype=self._real),
             grid_shape=self.shape,
             epsilon=self.epsilon,
             nthreads=self.threads,
@@ -53,13 +65,15 @@ class Ducc0Nufft:
     def type1(self, values):
         """``out[b, n] = sum_i values[b, i] exp(-2 pi i n . p_i)`` for a batch ``(B, M)``."""
         self.counts["type1"] += len(values)
-        out = np.empty((len(values),) + self.shape, dtype=np.complex128)
-        return self._plan.nu2u(forward=True, points=np.ascontiguousarray(values), out=out)
+        out = np.empty((len(values),) + self.shape, dtype=self._complex)
+        out = self._plan.nu2u(forward=True, points=np.ascontiguousarray(values, dtype=self._complex), out=out)
+        return out.astype(np.complex128, copy=False)
 
     def type2(self, coeffs):
         """``out[b, i] = sum_n coeffs[b, n] exp(+2 pi i n . p_i)`` for a batch ``(B, N1+1, N2+1)``."""
         self.counts["type2"] += len(coeffs)
-        return self._plan.u2nu(forward=False, grid=np.ascontiguousarray(coeffs))
+        out = self._plan.u2nu(forward=False, grid=np.ascontiguousarray(coeffs, dtype=self._complex))
+        return out.astype(np.complex128, copy=False)
 
 
 class FinufftNufft:
@@ -79,22 +93,31 @@ class FinufftNufft:
         self.threads = threads
         self.counts = {"type1": 0, "type2": 0, "set_points": 0}
         upsampfac = 1.25 if epsilon >= 1e-10 else 2.0
+        self._real, self._complex = precision(epsilon)
         self._plan = finufft.Plan(
-            1, self.shape, eps=max(epsilon / 3, 1e-14), isign=-1, nthreads=threads, upsampfac=upsampfac
+            1,
+            self.shape,
+            eps=max(epsilon / 3, 1e-14),
+            isign=-1,
+            nthreads=threads,
+            upsampfac=upsampfac,
+            dtype=np.dtype(self._complex).name,
         )
 
     def set_points(self, points):
-        self._points = 2 * np.pi * np.ascontiguousarray(points.T, dtype=np.float64)
+        self._points = 2 * np.pi * np.ascontiguousarray(points.T, dtype=self._real)
         self._plan.setpts(self._points[0], self._points[1])
         self.counts["set_points"] += 1
 
     def type1(self, values):
         self.counts["type1"] += len(values)
-        return np.stack([self._plan.execute(np.ascontiguousarray(v)) for v in values])
+        out = [self._plan.execute(np.ascontiguousarray(v, dtype=self._complex)) for v in values]
+        return np.stack(out).astype(np.complex128, copy=False)
 
     def type2(self, coeffs):
         self.counts["type2"] += len(coeffs)
-        return np.stack([self._plan.execute_adjoint(np.ascontiguousarray(c)) for c in coeffs])
+        out = [self._plan.execute_adjoint(np.ascontiguousarray(c, dtype=self._complex)) for c in coeffs]
+        return np.stack(out).astype(np.complex128, copy=False)
 
 
 class ResidueSplitNufft:
@@ -192,17 +215,23 @@ class TorusFourier:
     Real point data are packed two to a complex transform: the ``x`` and ``y`` components of a
     gradient are the real and imaginary parts of one type-2 transform, and a tangent field is
     analysed by one type-1 transform of ``v_x + i v_y``.
+
+    ``nufft`` (the whole mode grid) makes the derivatives' transforms (``gradient_synthesis``, ``gradient_analysis``,
+    ``jacobian_gram``, ``hessian_synthesis``) at its own accuracy; ``analysis``, whose sums the residual subtracts
+    from the target, has its own plans at ``analysis_epsilon`` (default: the same). A derivative only steers CG
+    and sizes its step, so it may be coarser than the residual (``stipple.torus.DERIVATIVE_EPSILON``).
     """
 
-    def __init__(self, nufft):
+    def __init__(self, nufft, analysis_epsilon=None):
         self.nufft = nufft
         # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
         self.threads = nufft.threads
+        self.epsilon = nufft.epsilon if analysis_epsilon is None else analysis_epsilon
         # ``analysis`` sums real values, so c_-n = conj(c_n): it transforms the rows n1 >= 0 only, on an odd grid
         # of at least N1/2 + 1 rows whose centre row is n1 = half_offset, and mirrors them.
         half_rows = nufft.shape[0] // 2 + 1
         half_rows += 1 - half_rows % 2
-        self.half_nufft = make_nufft(nufft.name, (half_rows, nufft.shape[1]), nufft.epsilon, nufft.threads)
+        self.half_nufft = make_nufft(nufft.name, (half_rows, nufft.shape[1]), self.epsilon, nufft.threads)
         self._half_offset = half_rows // 2
         self._half_phase = None
         self.modes = torus_modes(nufft.shape)

@@ -98,13 +98,13 @@ def test_run_options_reach_the_run(image_path):
     """--beta daniel with --settle 0 and --no-correct is 0.1's method: the same points as the library's run."""
     from stipple.halftone import run as library_run
     from stipple.io.images import load_density
-    from stipple.torus import torus_problem
+    from stipple.torus import DERIVATIVE_EPSILON, torus_problem
 
     args = ["torus", image_path, "-M", 150, "-N", 24, "--iterations", 30, "--threads", 1, "-q"]
     paper = run(args + ["--beta", "daniel", "--settle", 0, "--no-correct"])
     default = run(args)
     assert paper.exit_code == 0 and default.exit_code == 0
-    problem = torus_problem(load_density(image_path), 150, 24, threads=1)
+    problem = torus_problem(load_density(image_path), 150, 24, threads=1, derivative_epsilon=DERIVATIVE_EPSILON)
     expected = library_run(problem, iterations=30, beta="daniel", settle=0, correct=False).points * [24, 16]
     np.testing.assert_allclose(np.loadtxt(paper.output.splitlines(), delimiter=",", skiprows=1), expected, atol=1e-5)
     assert paper.output != default.output

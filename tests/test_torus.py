@@ -2,10 +2,14 @@ import numpy as np
 import pytest
 from scipy.special import roots_legendre
 
+from stipple.errors import StippleError
 from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
 from stipple.optimize import SETTLE_WINDOW
 from stipple.torus import (
+    DEFAULT_EPSILON,
+    DERIVATIVE_EPSILON,
     axis_bandwidths,
+    derivative_accuracy,
     halftone_torus,
     image_coefficients,
     sample_image,
@@ -193,3 +197,29 @@ def test_settle_stops_at_the_first_window_that_gains_less_than_the_fraction():
     assert never.status == "max_iterations"
     np.testing.assert_array_equal(never.energies[: len(energies)], energies)
     assert problem.settle == DEFAULT_SETTLE and run(problem, iterations=0).status == "max_iterations"
+
+
+def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
+    """``derivative_epsilon`` changes only the derivatives' transforms: the energy (the residual, at ``epsilon``)
+    is the double-precision one to 1e-12, the gradient and the Hessian form are within 1e-4 of it; the levels and
+    the coarse problems keep the setting; it is never finer than ``epsilon`` and is checked."""
+    weights = 0.2 + rng.random((32, 48))
+    points = rng.random((3000, 2))
+    exact = torus_problem(weights, 3000, threads=1)
+    single = torus_problem(weights, 3000, threads=1, derivative_epsilon=DERIVATIVE_EPSILON)
+    results = []
+    for problem in (exact, single):
+        problem.objective.set_points(points)
+        gradient = np.array(problem.objective.gradient())
+        results.append((problem.objective.energy(), gradient, problem.objective.hessian_gram([gradient, points])))
+    (energy, gradient, gram), (energy_single, gradient_single, gram_single) = results
+    assert energy_single == pytest.approx(energy, rel=1e-12)
+    assert 0 < np.linalg.norm(gradient_single - gradient) < 1e-4 * np.linalg.norm(gradient)
+    np.testing.assert_allclose(gram_single, gram, rtol=1e-4)
+    assert single.discrepancy.fourier.nufft.epsilon == DERIVATIVE_EPSILON
+    assert single.discrepancy.fourier.epsilon == exact.discrepancy.fourier.epsilon == DEFAULT_EPSILON
+    for other in (single.level(1000), single.coarse(16)):
+        assert other.discrepancy.fourier.nufft.epsilon == DERIVATIVE_EPSILON
+    assert derivative_accuracy(1e-3, 1e-4) == 1e-3
+    with pytest.raises(StippleError, match="epsilon"):
+        torus_problem(weights, 3000, derivative_epsilon=float("nan"))

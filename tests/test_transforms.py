@@ -116,3 +116,30 @@ def test_residue_split_type2_uses_the_points_given_to_set_points(rng):
     nufft.set_points(points)
     points[:] = 0.5  # the caller reuses its array
     np.testing.assert_allclose(nufft.type2(np.ones((1,) + shape, dtype=np.complex128)), expected, atol=1e-9)
+
+
+@pytest.mark.parametrize("backend_class", [Ducc0Nufft, FinufftNufft])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_single_precision_transforms_against_direct_sums(backend_class, threads, rng):
+    """At an epsilon of 1e-4 the transforms run in single precision and still match direct sums to that accuracy
+    (relative to the sums of magnitudes, the libraries' bound); results come back in double precision."""
+    shape = (21, 13)
+    points = rng.random((200, 2))
+    nufft = ResidueSplitNufft(backend_class, shape, 1e-4, threads) if threads > 1 else backend_class(shape, 1e-4, 1)
+    nufft.set_points(points)
+    matrix = direct_matrix(points, shape)
+    values = rng.standard_normal((2, 200)) + 1j * rng.standard_normal((2, 200))
+    coeffs = rng.standard_normal((2,) + shape) + 1j * rng.standard_normal((2,) + shape)
+    forward, backward = nufft.type1(values), nufft.type2(coeffs)
+    assert forward.dtype == backward.dtype == np.complex128
+    exact_forward = np.einsum("bm,mxy->bxy", values, matrix)
+    exact_backward = np.einsum("bxy,mxy->bm", coeffs, matrix.conj())
+    assert np.abs(forward - exact_forward).max() < 1e-4 * np.abs(values).sum(axis=1).max()
+    assert np.abs(backward - exact_backward).max() < 1e-4 * np.abs(coeffs).sum(axis=(1, 2)).max()
+    # Single precision is not double precision: the same transforms at 1e-12 are much closer.
+    assert np.abs(forward - exact_forward).max() > 1e3 * 1e-12 * np.abs(values).sum(axis=1).max()
+
+
+def test_precision_follows_epsilon():
+    assert stipple.transforms.precision(stipple.transforms.SINGLE_PRECISION_EPSILON) == (np.float32, np.complex64)
+    assert stipple.transforms.precision(1e-7) == (np.float64, np.complex128)

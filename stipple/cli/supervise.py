@@ -178,10 +178,9 @@ def announcer(options):
 
     def announce(problem):
         fourier = problem.discrepancy.fourier
-        transforms = getattr(fourier, "nufft", fourier)
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
         click.echo(
-            f"stipple: {details}, threads={transforms.threads}, epsilon={transforms.epsilon:g}, "
+            f"stipple: {details}, threads={fourier.threads}, epsilon={fourier.epsilon:g}, "
             f"tol={options['tol']:g}, iterations<={options['iterations']}",
             err=True,
         )

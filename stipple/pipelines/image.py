@@ -7,7 +7,7 @@ from ..errors import StippleError
 from ..halftone import check_bandwidth, check_count, check_epsilon, check_run_options, check_threads, run
 from ..io.images import check_load_options, load_input
 from ..io.png import check_png_outputs
-from ..torus import torus_problem
+from ..torus import DERIVATIVE_EPSILON, torus_problem
 from ..transforms import BACKENDS
 from .inputs import read_torus_init
 from .outputs import torus_files
@@ -102,7 +102,8 @@ def stipple_image(image, formats, recipe, *, session=None, inspect=None, announc
 def image_problem(weights, formats, recipe):
     """The torus problem of the density ``weights`` with ``recipe.problem``'s settings, once the PNG canvas that
     ``formats`` need is known to fit in memory; with ``--order progressive`` the nested levels' problem
-    (``stipple.progressive.progressive_problem``)."""
+    (``stipple.progressive.progressive_problem``). The plain problem's derivatives are single-precision
+    transforms (``stipple.torus.DERIVATIVE_EPSILON``)."""
     settings = dict(recipe.problem)
     n_points = settings.pop("n_points")
     check_png_outputs(formats, weights.shape[::-1], recipe.draw.get("png_width"), n_points)
@@ -110,7 +111,8 @@ def image_problem(weights, formats, recipe):
         from ..progressive import progressive_problem
 
         return progressive_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
-    return torus_problem(weights, n_points, settings.pop("bandwidth", None), **settings)
+    bandwidth = settings.pop("bandwidth", None)
+    return torus_problem(weights, n_points, bandwidth, derivative_epsilon=DERIVATIVE_EPSILON, **settings)
 
 
 def check_recipe(recipe):
