@@ -117,3 +117,21 @@ def test_vpype_plugin_auto_count(tmp_path):
     assert sum(len(layer) for layer in document.layers.values()) == expected
     with pytest.raises(Exception, match="whole number or 'auto'"):
         vpype_cli.execute(f"stipple -M lots {image}")
+
+
+@pytest.mark.parametrize("colours", [[(0.0,) * 3, (0.5,) * 3], [(0.1, 0.2, 0.9), (1.0, 0.4, 0.0)]])
+def test_opaque_layers_drawn_directly_equal_the_composited_masks(colours, rng):
+    """Opaque inks "over" one another (discs, ellipses and pen paths overlapping, gray and colour) are drawn
+    straight onto the canvas: the same bits as painting each layer's coverage mask over the planes (the path an
+    underlay takes; an empty underlay changes nothing)."""
+    centres = rng.random((2, 60, 2)) * 100
+    first = Dots("a", colours[0], centres[0], rng.uniform(0.5, 6, 60))
+    second = Dots("b", colours[1], centres[1], rng.uniform(0.5, 6, 60), squash=rng.uniform(0.3, 1, 60))
+    second.angle = rng.uniform(0, np.pi, 60)
+    third = Dots("c", colours[1], centres[1][:20], np.full(20, 2.0))
+    third.paths = dot_paths(third.centres, third.radii, "circle", 0.8)
+    layers = [first, second, third]
+    direct = np.asarray(render_picture(layers, (100, 80), 300, pen_width=0.8))
+    masks = np.asarray(render_picture(layers, (100, 80), 300, pen_width=0.8, underlay=lambda draw, scale: None))
+    np.testing.assert_array_equal(direct, masks)
+    assert len(np.unique(direct)) > 3

@@ -114,6 +114,14 @@ def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=Non
     scale, canvas_size = png_canvas(size, pixels_wide)
     colours = [tuple(background)] + [tuple(dots.colour) for dots in layers]
     channels = 1 if all(len(set(c)) == 1 for c in colours) else 3
+    if blend == "over" and underlay is None:
+        # Opaque inks over one another: each fine pixel takes the last covering layer's colour, drawn directly.
+        mode = "L" if channels == 1 else "RGB"
+        canvas = Image.new(mode, canvas_size, _pixel_value(background, channels))
+        draw = ImageDraw.Draw(canvas)
+        for dots in layers:
+            _draw_layer(draw, dots, scale, pen_width, _pixel_value(dots.colour, channels))
+        return canvas.reduce(SUPERSAMPLE)
     # One float32 plane per channel (a gray picture needs one): the supersampled canvas is 16 million pixels
     # for the default 1024-pixel PNG, and an (H, W, 3) float64 picture took most of the drawing time.
     planes = [np.full((canvas_size[1], canvas_size[0]), background[k], dtype=np.float32) for k in range(channels)]
@@ -140,32 +148,42 @@ def _paint(planes, coverage, colour, blend):
         plane += coverage * (target - plane)
 
 
+def _pixel_value(colour, channels):
+    """An RGB colour in [0, 1] as Pillow's 8-bit pixel value (gray for one channel)."""
+    values = tuple(int(np.round(np.clip(colour[k], 0, 1) * 255)) for k in range(channels))
+    return values[0] if channels == 1 else values
+
+
 def _coverage(dots, canvas_size, scale, pen_width):
     """A mask (``PIL.Image`` "L") of the ink of one layer of dots on the supersampled canvas."""
     mask = Image.new("L", canvas_size, 0)
-    draw = ImageDraw.Draw(mask)
+    _draw_layer(ImageDraw.Draw(mask), dots, scale, pen_width, 255)
+    return mask
+
+
+def _draw_layer(draw, dots, scale, pen_width, fill):
+    """Draw one layer of dots with ``fill`` on a supersampled canvas (``ImageDraw``)."""
     if dots.paths is not None:
         stroke = max(int(round(pen_width * scale)), 1)
         cap = stroke / 2
         for path in dots.paths:
-            draw.line([(z.real * scale, z.imag * scale) for z in path], fill=255, width=stroke, joint="curve")
+            draw.line([(z.real * scale, z.imag * scale) for z in path], fill=fill, width=stroke, joint="curve")
             # Round caps, as the SVG's stroke-linecap: a "point" dot inks a pen-wide disc, not a sliver.
             for end in (path[0] * scale, path[-1] * scale):
-                draw.ellipse((end.real - cap, end.imag - cap, end.real + cap - 1, end.imag + cap - 1), fill=255)
+                draw.ellipse((end.real - cap, end.imag - cap, end.real + cap - 1, end.imag + cap - 1), fill=fill)
     elif dots.squash is None:
         # Pillow's box holds the indices of the first and last pixel covered: c -+ (r - 1/2) in pixel-centre
         # coordinates, so that the disc covers about pi r^2 fine pixels (c -+ r drew it a pixel too wide); a dot
         # smaller than a fine pixel is drawn as 2 x 2 of them.
         for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 1.0), strict=True):
-            draw.ellipse((x - radius, y - radius, x + radius - 1, y + radius - 1), fill=255)
+            draw.ellipse((x - radius, y - radius, x + radius - 1, y + radius - 1), fill=fill)
     else:
         for centre, radius, squash, angle in zip(
             dots.centres * scale, dots.radii * scale, dots.squash, dots.angle, strict=True
         ):
             draw.polygon(
-                ellipse_polygon(centre - 0.5, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=255
+                ellipse_polygon(centre - 0.5, max(radius, 0.5), max(squash, 0.5 / max(radius, 0.5)), angle), fill=fill
             )
-    return mask
 
 
 def ellipse_polygon(centre, radius, squash=1.0, angle=0.0, segments=24):
