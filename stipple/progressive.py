@@ -4,16 +4,26 @@ The dots are one array in passes ``P_1, ..., P_L`` (``LEVELS`` by default); leve
 ``P_1 ∪ ... ∪ P_k`` with ``m_k`` dots. The objective is the multi-class one (``stipple.multiclass``) with the
 levels as its terms:
 
-    E(p) = sum_k a_k E(p[:m_k]; w),    a_k = (m_k / M) ** LEVEL_POWER,
+    E(p) = sum_k a_k E(p[:m_k]; w),
 
 each level's own discrepancy (with its own default bandwidth and near field) against the same density, so every
-prefix is a stipple of the whole image at its own density. ``a_k = m_k / M`` (each level by its share of the dots);
-on the cat at M = 3000, powers 0, 1 and 1.5 gave the levels E_N within 1.02-1.17, 1.04-1.16 and 1.08-1.18 of
-independent stipples, and 1 the lowest picture errors. The start is the stratified one (dots shared out along a
-Hilbert curve) dealt into passes in bit-reversed turns (for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...),
-so every level starts spread over the image. The low-frequency correction (``stipple.halftone``) runs on the full
-set, as for one stipple: its smooth deformation moves every level alike. On paper each pass is drawn along its own
-short pen path (``stipple.render.pen.plotter_order``), the passes one after another.
+prefix is a stipple of the whole image at its own density. The factors ``a_k`` are ``level_factors``: the
+levels the order promises are the doublings, ``M / 2^j`` dots (with four passes the quarter, the half and the
+whole), and two levels of which one has twice the dots of the other pull against each other. A good stipple is
+locally close to a triangular lattice; a triangular lattice has triangular sublattices of index 3 and 4 but none
+of index 2, so the quarter and the whole can both be nearly hexagonal but the half, between them, cannot be as
+well. Weighted by their shares of the dots alone (``a_k = m_k / M``, i.e. each level's ``E_N`` over its i.i.d.
+expectation counted alike), the half lost to both its neighbours: ``E_N`` 1.05 / 1.17 / 1.25 / 1.11 times that
+of independent stipples at 25 / 50 / 75 / 100 %, and its picture up to 1.6 times the RMSE (docs/plotters.md).
+So a promised level counts its share once for each promised level it doubles or halves: the half, squeezed from
+both sides, twice; the levels between the doublings (75 %) a third of their share, to remain even stipples
+without pulling the half apart (at half their share the half's picture went back above 1.3 times the RMSE).
+
+The start is the stratified one (dots shared out along a Hilbert curve) dealt into passes in bit-reversed turns
+(for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...), so every level starts spread over the image. The
+low-frequency correction (``stipple.halftone``) runs on the full set, as for one stipple: its smooth deformation
+moves every level alike. On paper each pass is drawn along its own short pen path
+(``stipple.render.pen.plotter_order``), the passes one after another.
 """
 
 import numpy as np
@@ -23,7 +33,8 @@ from .render.pen import path_length, plotter_order
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
 
 LEVELS = 4
-LEVEL_POWER = 1.0
+# A level between the doublings counts this fraction of its share of the dots (see the module docstring).
+BETWEEN_SHARE = 1 / 3
 
 
 def pass_offsets(levels):
@@ -36,6 +47,29 @@ def pass_offsets(levels):
 def pass_counts(n_points, levels=LEVELS):
     """Dots per pass, in pass order: the passes of ``interleave``."""
     return [len(range(offset, n_points, levels)) for offset in pass_offsets(levels)]
+
+
+def promised_levels(levels):
+    """The levels ``k`` (1-based, of ``levels`` passes) that are doublings: ``levels / k`` a power of two."""
+    return [k for k in range(1, levels + 1) if levels % k == 0 and (levels // k) & (levels // k - 1) == 0]
+
+
+def level_factors(ends):
+    """The factors ``a_k`` of the levels with ``ends[k-1]`` dots (the last one the full set's).
+
+    A promised level (``promised_levels``) gets its share ``m_k / M`` once for each promised level with twice or
+    half its dots (at least once); a level between them ``BETWEEN_SHARE`` of its share.
+    """
+    ends = np.asarray(ends, dtype=np.float64)
+    promised = set(promised_levels(len(ends)))
+    factors = []
+    for k, share in enumerate(ends / ends[-1], start=1):
+        if k in promised:
+            doubled = sum(other in promised for other in (k // 2 if k % 2 == 0 else 0, 2 * k))
+            factors.append(float(share * max(doubled, 1)))
+        else:
+            factors.append(float(share * BETWEEN_SHARE))
+    return factors
 
 
 def interleave(points, levels=LEVELS):
@@ -96,7 +130,7 @@ def progressive_problem(
         for end in ends[:-1]
     ] + [full]
     slices = [slice(0, int(end)) for end in ends]
-    factors = [(end / n_points) ** LEVEL_POWER for end in ends]
+    factors = level_factors(ends)
     objective = MulticlassObjective([part.objective for part in parts], slices, factors)
     return MulticlassProblem(
         domain="torus",
