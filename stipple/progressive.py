@@ -26,6 +26,8 @@ moves every level alike. On paper each pass is drawn along its own short pen pat
 (``stipple.render.pen.plotter_order``), the passes one after another.
 """
 
+from dataclasses import replace
+
 import numpy as np
 
 from .multiclass import MulticlassObjective, MulticlassProblem, class_bandwidth
@@ -166,24 +168,76 @@ def progressive_order(centres, counts):
     return order, path_length(centres), path_length(centres[order])
 
 
-def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=None, **options):
-    """``stipple.colour.halftone_colour`` for one ink with nested levels: ``(layers, result, counts)``.
+def progressive_inks(layers, problem, *, levels=LEVELS, **options):
+    """The joint problem of several inks (``stipple.colour.colour_problem``'s ``problem``) with each ink's dots
+    in nested levels: every ink's class term becomes its own levels' terms (``progressive_problem``), the
+    union's term (all inks' dots, the last one) stays.
 
-    ``union_weight`` is ignored (one ink has no union term); ``options`` are ``progressive_problem``'s and
-    ``stipple.halftone.run``'s. ``counts`` are the passes' dots, in array order.
+    Parameters
+    ----------
+    layers : sequence of stipple.colour.Layer
+        The inks that got dots, in the order of ``problem.slices``.
+    problem : stipple.multiclass.MulticlassProblem
+    levels : int
+        Passes per ink (an ink with fewer dots gets one pass per dot).
+    options :
+        ``progressive_problem``'s ``backend``, ``threads``, ``epsilon``, ``hessian``, ``near_field``.
+
+    Returns
+    -------
+    tuple
+        The ``MulticlassProblem`` and each ink's dots per pass, in array order.
     """
-    from .colour import separate
-    from .errors import StippleError
+    inks = [
+        progressive_problem(
+            layer.density, part.stop - part.start, levels=min(levels, part.stop - part.start), **options
+        )
+        for layer, part in zip(layers, problem.slices, strict=True)
+    ]
+    terms, slices, factors = [], [], []
+    for ink, part in zip(inks, problem.slices, strict=True):
+        terms += ink.objective.terms
+        factors += ink.objective.weights
+        slices += [slice(part.start + level.start, part.start + level.stop) for level in ink.slices]
+    union = problem.objective
+    objective = MulticlassObjective([*terms, union.terms[-1]], [*slices, slice(None)], [*factors, union.weights[-1]])
+    nested = replace(
+        problem,
+        objective=objective,
+        stratified=lambda rng, count: np.concatenate([ink.stratified(rng, ink.n_points) for ink in inks]),
+        settle=inks[0].settle,
+        settings={
+            **problem.settings,
+            "order": "progressive",
+            "ink_level_points": [ink.settings["level_points"] for ink in inks],
+        },
+    )
+    return nested, [np.diff([0] + [level.stop for level in ink.slices]) for ink in inks]
+
+
+def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=1.0, **options):
+    """``stipple.colour.halftone_colour`` with each ink's dots in nested levels: ``(layers, result, counts)``.
+
+    One ink is ``progressive_problem``'s (no union term); several are ``progressive_inks``'s, the union's term
+    weighted ``union_weight``. ``options`` are ``progressive_problem``'s and ``stipple.halftone.run``'s.
+    ``counts`` are each ink's dots per pass, in array order (the inks one after another, as ``layers``).
+    """
+    from .colour import colour_problem, separate
     from .halftone import run
     from .io.images import load_colour
 
-    layers = separate(rgb if isinstance(rgb, np.ndarray) else load_colour(rgb), separation, black)
-    if len(layers) != 1:
-        raise StippleError(f"--order progressive is for one ink (gray or one pen), not {len(layers)} inks")
+    rgb = rgb if isinstance(rgb, np.ndarray) else load_colour(rgb)
     keys = ("backend", "threads", "epsilon", "hessian", "near_field", "levels")
     settings = {key: options.pop(key) for key in keys if key in options}
-    problem = progressive_problem(layers[0].density, n_points, **settings)
-    counts = np.diff([0] + [part.stop for part in problem.slices])
+    layers = separate(rgb, separation, black)
+    if len(layers) == 1:
+        problem = progressive_problem(layers[0].density, n_points, **settings)
+        return layers, run(problem, **options), [np.diff([0] + [part.stop for part in problem.slices])]
+    levels = settings.pop("levels", LEVELS)
+    layers, joint = colour_problem(
+        rgb, n_points, separation=separation, black=black, union_weight=union_weight, **settings
+    )
+    problem, counts = progressive_inks(layers, joint, levels=levels, **settings)
     return layers, run(problem, **options), counts
 
 

@@ -15,6 +15,7 @@ from stipple.progressive import (
     level_factors,
     pass_counts,
     pass_offsets,
+    progressive_inks,
     progressive_order,
     progressive_problem,
     promised_levels,
@@ -190,14 +191,79 @@ def test_vpype_plugin_progressive_keeps_one_layer_per_pen(tmp_path):
     assert len(next(iter(path.layers.values()))) == 200
 
 
-def test_vpype_plugin_progressive_refuses_several_inks(tmp_path):
-    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+def two_inks():
+    """A cyan blob over a magenta ramp (``cmy``: two inks)."""
+    y, x = np.mgrid[0:24, 0:32] / 24
+    rgb = np.ones((24, 32, 3))
+    rgb[..., 0] = 1 - 0.7 * np.exp(-((x - 0.5) ** 2 + (y - 0.4) ** 2) * 6)
+    rgb[..., 1] = 1 - 0.6 * x / x.max()
+    return rgb
+
+
+def test_inks_objective_is_every_inks_levels_and_the_union(rng):
+    from stipple.colour import colour_problem
+
+    layers, joint = colour_problem(two_inks(), 90, separation="cmy", union_weight=0.7, threads=1)
+    problem, counts = progressive_inks(layers, joint, threads=1)
+    points = problem.manifold.random(rng, 90)
+    problem.objective.set_points(points)
+    expected, start = 0.0, 0
+    for layer, passes in zip(layers, counts, strict=True):
+        ends = np.cumsum(passes)
+        for end, factor in zip(ends, level_factors(ends), strict=True):
+            level = torus_problem(layer.density, int(end), default_bandwidth(int(end), layer.density), threads=1)
+            level.objective.set_points(points[start : start + end])
+            expected += factor * level.objective.energy()
+        start += ends[-1]
+    union = torus_problem(sum(layer.density for layer in layers), 90, joint.bandwidth, threads=1)
+    union.objective.set_points(points)
+    expected += 0.7 * union.objective.energy()
+    assert start == 90 and [len(passes) for passes in counts] == [4, 4]
+    assert problem.objective.energy() == pytest.approx(expected, rel=1e-12)
+
+
+def test_every_inks_levels_are_good_stipples_and_the_inks_avoid_each_other():
+    from stipple.progressive import progressive_colour
+
+    rgb, count = two_inks(), 800
+    unions = {}
+    for union_weight in (1.0, 0.0):
+        layers, result, counts = progressive_colour(
+            rgb, count, separation="cmy", union_weight=union_weight, threads=1, seed=1, iterations=300
+        )
+        union = torus_problem(sum(layer.density for layer in layers), count, threads=1)
+        alone = run(union, seed=2, iterations=300).points
+        unions[union_weight] = discrepancy_energy(union, result.points) / discrepancy_energy(union, alone)
+    start = 0
+    for layer, passes in zip(layers, counts, strict=True):
+        ends = np.cumsum(passes)
+        for k, end in enumerate(ends, start=1):
+            level = torus_problem(layer.density, int(end), threads=1)
+            ratio = discrepancy_energy(level, result.points[start : start + end])
+            ratio /= discrepancy_energy(level, run(level, seed=2, iterations=300).points)
+            assert ratio < (1.25 if k in promised_levels(len(passes)) else 1.9)
+        start += ends[-1]
+    # The union's term keeps the inks' dots apart: without it all the dots together are far less even.
+    assert unions[1.0] < 1.3 and unions[0.0] > 1.5
+
+
+def test_vpype_plugin_progressive_keeps_the_passes_per_pen(tmp_path):
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
     import vpype_cli
 
     rgb = tmp_path / "rgb.png"
-    Image.fromarray(np.random.default_rng(1).integers(0, 255, (8, 8, 3), dtype=np.uint8)).save(rgb)
-    with pytest.raises(Exception, match="one ink"):
-        vpype_cli.execute(f"stipple -M 50 --iterations 2 --separation cmyk --order progressive {rgb}")
+    Image.fromarray((255 * two_inks()).astype(np.uint8)).save(rgb)
+    document = vpype_cli.execute(
+        f"stipple -M 400 --iterations 40 --dot-style point --width 100mm --separation cmy --order progressive {rgb}"
+    )
+    layers = {layer.property(vpype.METADATA_FIELD_NAME): layer for layer in document.layers.values()}
+    assert sorted(layers) == ["cyan", "magenta"] and sum(len(layer) for layer in layers.values()) == 400
+    for layer in layers.values():
+        centres = np.array([path[0] for path in layer])
+        quarter = len(centres) // 4
+        # Each pen's first pass alone is spread over the page (its dots' bounding box covers most of that pen's).
+        first = centres[:quarter]
+        assert np.ptp(first.real) > 0.6 * np.ptp(centres.real) and np.ptp(first.imag) > 0.6 * np.ptp(centres.imag)
 
 
 def test_low_frequency_correction_runs_on_the_full_set():
