@@ -2,7 +2,8 @@
 
 For each image and M, runs ``stipple torus IMAGE -M M --order progressive -o prog.csv`` (dots in plotting
 order), ``stipple torus IMAGE -M M --order -o path.csv`` (one short path: the independent stipple of M dots) and
-independent stipples of M/4 and M/2 dots. For the first 25 %, 50 % and 100 % of the progressive dots and for the
+independent stipples of M/4, M/2 and 3M/4 dots. For the first 25 %, 50 %, 75 % and 100 % of the progressive
+dots (the issue's bar is on 25, 50 and 100 %; 75 % is the end of the third pass) and for the
 independent stipple of that many dots: E_N over its i.i.d. expectation (``stipple evaluate POINTS IMAGE``) and
 the luminance RMSE at sigma 2 px of the tone-true picture (``stipple render --like IMAGE`` then ``stipple evaluate
 PICTURE IMAGE``); and the pen-up travel of both orders from the commands' own lines. Writes
@@ -24,7 +25,7 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path("/work/shared/data")
-FRACTIONS = (0.25, 0.5, 1.0)
+FRACTIONS = (0.25, 0.5, 0.75, 1.0)
 
 
 def make_inputs(folder, pixels):
@@ -107,7 +108,7 @@ def run_case(name, image, count, folder):
 def table(summary):
     """Markdown rows: image, M, per prefix the E_N and RMSE ratios, and the travel ratio."""
     lines = [
-        "| image | M | E_N ratio 25 / 50 / 100 % | RMSE ratio σ 2 px, 25 / 50 / 100 % | RMSE ratio σ 4 px "
+        "| image | M | E_N ratio 25 / 50 / 75 / 100 % | RMSE ratio σ 2 px, 25 / 50 / 75 / 100 % | RMSE ratio σ 4 px "
         "| pen-up travel progressive / one path |",
         "|---|---|---|---|---|---|",
     ]
