@@ -17,13 +17,16 @@ expectation counted alike), the half lost to both its neighbours: ``E_N`` 1.05 /
 of independent stipples at 25 / 50 / 75 / 100 %, and its picture up to 1.6 times the RMSE (docs/plotters.md).
 So a promised level counts its share once for each promised level it doubles or halves: the half, squeezed from
 both sides, twice; the levels between the doublings (75 %) a third of their share, to remain even stipples
-without pulling the half apart (at half their share the half's picture went back above 1.3 times the RMSE).
+without pulling the half apart (at two thirds of their share the half's picture went back above 1.3 times the
+RMSE). With four passes: 0.25, 1, 0.25, 1.
 
 The start is the stratified one (dots shared out along a Hilbert curve) dealt into passes in bit-reversed turns
 (for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...), so every level starts spread over the image. The
 low-frequency correction (``stipple.halftone``) runs on the full set, as for one stipple: its smooth deformation
 moves every level alike. On paper each pass is drawn along its own short pen path
-(``stipple.render.pen.plotter_order``), the passes one after another.
+(``stipple.render.pen.plotter_order``), the passes one after another. Several inks (``progressive_inks``,
+through the vpype plug-in) are the joint problem of ``stipple.colour`` with every ink's term replaced by its
+own levels' terms: each pen's layer is drawn in its own passes, and the union's term keeps the inks apart.
 """
 
 from dataclasses import replace
