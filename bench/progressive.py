@@ -2,13 +2,19 @@
 
 For each image and M, runs ``stipple torus IMAGE -M M --order progressive -o prog.csv`` (dots in plotting
 order), ``stipple torus IMAGE -M M --order -o path.csv`` (one short path: the independent stipple of M dots) and
-independent stipples of M/4 and M/2 dots. For the first 25 %, 50 % and 100 % of the progressive dots and for the
+independent stipples of M/4, M/2 and 3M/4 dots. For the first 25 %, 50 %, 75 % and 100 % of the progressive
+dots (the issue's bar is on 25, 50 and 100 %; 75 % is the end of the third pass) and for the
 independent stipple of that many dots: E_N over its i.i.d. expectation (``stipple evaluate POINTS IMAGE``) and
 the luminance RMSE at sigma 2 px of the tone-true picture (``stipple render --like IMAGE`` then ``stipple evaluate
 PICTURE IMAGE``); and the pen-up travel of both orders from the commands' own lines. Writes
 ``out/progressive/summary.json`` and prints a Markdown table.
 
-    python bench/progressive.py [--counts 3000,10000,30000] [--pixels 256] [--out DIR]
+With ``--inks`` instead: the astronaut in cmyk with each ink in passes (``stipple.progressive.progressive_colour``,
+what ``vpype stipple --order progressive`` draws) against the one-pass joint stipple of the same inks
+(``stipple.colour.halftone_colour``): every ink's levels' E_N over an independent stipple of that ink alone, and
+all the dots' over an independent stipple of the union.
+
+    python bench/progressive.py [--counts 3000,10000,30000] [--pixels 256] [--out DIR] [--inks]
 """
 
 import argparse
@@ -24,7 +30,7 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path("/work/shared/data")
-FRACTIONS = (0.25, 0.5, 1.0)
+FRACTIONS = (0.25, 0.5, 0.75, 1.0)
 
 
 def make_inputs(folder, pixels):
@@ -107,7 +113,7 @@ def run_case(name, image, count, folder):
 def table(summary):
     """Markdown rows: image, M, per prefix the E_N and RMSE ratios, and the travel ratio."""
     lines = [
-        "| image | M | E_N ratio 25 / 50 / 100 % | RMSE ratio σ 2 px, 25 / 50 / 100 % | RMSE ratio σ 4 px "
+        "| image | M | E_N ratio 25 / 50 / 75 / 100 % | RMSE ratio σ 2 px, 25 / 50 / 75 / 100 % | RMSE ratio σ 4 px "
         "| pen-up travel progressive / one path |",
         "|---|---|---|---|---|---|",
     ]
@@ -128,13 +134,60 @@ def table(summary):
     return "\n".join(lines)
 
 
+def level_ratio(density, points):
+    """E_N of ``points`` over that of an independent stipple of as many dots of ``density``."""
+    from stipple.halftone import run
+    from stipple.measures.evaluate import discrepancy_energy
+    from stipple.torus import torus_problem
+
+    level = torus_problem(density, len(points))
+    return discrepancy_energy(level, points) / discrepancy_energy(level, run(level, seed=2).points)
+
+
+def inks_case(count, pixels):
+    """Markdown rows: per cmyk ink of the astronaut, its levels' E_N ratios, progressive against one pass."""
+    from stipple.colour import halftone_colour
+    from stipple.progressive import progressive_colour
+
+    image = Image.open(DATA / "astronaut.png").convert("RGB")
+    image = image.resize((pixels, round(image.height * pixels / image.width)), Image.LANCZOS)
+    rgb = np.asarray(image, dtype=np.float64) / 255
+    started = time.perf_counter()
+    layers, result, counts = progressive_colour(rgb, count, separation="cmyk", seed=0)
+    seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    _, joint, one_pass = halftone_colour(rgb, count, separation="cmyk", seed=0)
+    lines = [
+        f"M = {count}: progressive {seconds:.1f} s, one pass {time.perf_counter() - started:.1f} s",
+        "| ink | dots | E_N ratio 25 / 50 / 75 / 100 %, progressive | E_N ratio, one pass |",
+        "|---|---|---|---|",
+    ]
+    start = 0
+    for layer, passes, part in zip(layers, counts, joint.slices, strict=True):
+        points = result.points[start : start + sum(passes)]
+        start += sum(passes)
+        ratios = [level_ratio(layer.density, points[:end]) for end in np.cumsum(passes)]
+        alone = level_ratio(layer.density, one_pass.points[part])
+        lines.append(f"| {layer.name} | {len(points)} | {' / '.join(f'{v:.2f}' for v in ratios)} | {alone:.2f} |")
+    union = sum(layer.density for layer in layers)
+    lines.append(
+        f"| all dots | {count} | {level_ratio(union, result.points):.2f} | {level_ratio(union, one_pass.points):.2f} |"
+    )
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", default="3000,10000,30000")
     parser.add_argument("--pixels", type=int, default=256)
     parser.add_argument("--only", default=None)
     parser.add_argument("--out", default=str(ROOT / "out" / "progressive"))
+    parser.add_argument("--inks", action="store_true", help="several inks (cmyk) instead: see the docstring")
     options = parser.parse_args(argv)
+    if options.inks:
+        for count in (int(c) for c in options.counts.split(",")):
+            print(inks_case(count, options.pixels), flush=True)
+        return
     folder = Path(options.out)
     summary_path = folder / "summary.json"
     summary = json.loads(summary_path.read_text()) if summary_path.exists() else []

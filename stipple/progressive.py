@@ -4,17 +4,32 @@ The dots are one array in passes ``P_1, ..., P_L`` (``LEVELS`` by default); leve
 ``P_1 ∪ ... ∪ P_k`` with ``m_k`` dots. The objective is the multi-class one (``stipple.multiclass``) with the
 levels as its terms:
 
-    E(p) = sum_k a_k E(p[:m_k]; w),    a_k = (m_k / M) ** LEVEL_POWER,
+    E(p) = sum_k a_k E(p[:m_k]; w),
 
 each level's own discrepancy (with its own default bandwidth and near field) against the same density, so every
-prefix is a stipple of the whole image at its own density. ``a_k = m_k / M`` (each level by its share of the dots);
-on the cat at M = 3000, powers 0, 1 and 1.5 gave the levels E_N within 1.02-1.17, 1.04-1.16 and 1.08-1.18 of
-independent stipples, and 1 the lowest picture errors. The start is the stratified one (dots shared out along a
-Hilbert curve) dealt into passes in bit-reversed turns (for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...),
-so every level starts spread over the image. The low-frequency correction (``stipple.halftone``) runs on the full
-set, as for one stipple: its smooth deformation moves every level alike. On paper each pass is drawn along its own
-short pen path (``stipple.render.pen.plotter_order``), the passes one after another.
+prefix is a stipple of the whole image at its own density. The factors ``a_k`` are ``level_factors``: the
+levels the order promises are the doublings, ``M / 2^j`` dots (with four passes the quarter, the half and the
+whole), and two levels of which one has twice the dots of the other pull against each other. A good stipple is
+locally close to a triangular lattice; a triangular lattice has triangular sublattices of index 3 and 4 but none
+of index 2, so the quarter and the whole can both be nearly hexagonal but the half, between them, cannot be as
+well. Weighted by their shares of the dots alone (``a_k = m_k / M``, i.e. each level's ``E_N`` over its i.i.d.
+expectation counted alike), the half lost to both its neighbours: ``E_N`` 1.05 / 1.17 / 1.25 / 1.11 times that
+of independent stipples at 25 / 50 / 75 / 100 %, and its picture up to 1.6 times the RMSE (docs/plotters.md).
+So a promised level counts its share once for each promised level it doubles or halves: the half, squeezed from
+both sides, twice; the levels between the doublings (75 %) a third of their share, to remain even stipples
+without pulling the half apart (at two thirds of their share the half's picture went back above 1.3 times the
+RMSE). With four passes: 0.25, 1, 0.25, 1.
+
+The start is the stratified one (dots shared out along a Hilbert curve) dealt into passes in bit-reversed turns
+(for 4 passes: dots 0, 4, 8, ... first, then 2, 6, 10, ...), so every level starts spread over the image. The
+low-frequency correction (``stipple.halftone``) runs on the full set, as for one stipple: its smooth deformation
+moves every level alike. On paper each pass is drawn along its own short pen path
+(``stipple.render.pen.plotter_order``), the passes one after another. Several inks (``progressive_inks``,
+through the vpype plug-in) are the joint problem of ``stipple.colour`` with every ink's term replaced by its
+own levels' terms: each pen's layer is drawn in its own passes, and the union's term keeps the inks apart.
 """
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,7 +38,8 @@ from .render.pen import path_length, plotter_order
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
 
 LEVELS = 4
-LEVEL_POWER = 1.0
+# A level between the doublings counts this fraction of its share of the dots (see the module docstring).
+BETWEEN_SHARE = 1 / 3
 
 
 def pass_offsets(levels):
@@ -36,6 +52,29 @@ def pass_offsets(levels):
 def pass_counts(n_points, levels=LEVELS):
     """Dots per pass, in pass order: the passes of ``interleave``."""
     return [len(range(offset, n_points, levels)) for offset in pass_offsets(levels)]
+
+
+def promised_levels(levels):
+    """The levels ``k`` (1-based, of ``levels`` passes) that are doublings: ``levels / k`` a power of two."""
+    return [k for k in range(1, levels + 1) if levels % k == 0 and (levels // k) & (levels // k - 1) == 0]
+
+
+def level_factors(ends):
+    """The factors ``a_k`` of the levels with ``ends[k-1]`` dots (the last one the full set's).
+
+    A promised level (``promised_levels``) gets its share ``m_k / M`` once for each promised level with twice or
+    half its dots (at least once); a level between them ``BETWEEN_SHARE`` of its share.
+    """
+    ends = np.asarray(ends, dtype=np.float64)
+    promised = set(promised_levels(len(ends)))
+    factors = []
+    for k, share in enumerate(ends / ends[-1], start=1):
+        if k in promised:
+            doubled = sum(other in promised for other in (k // 2 if k % 2 == 0 else 0, 2 * k))
+            factors.append(float(share * max(doubled, 1)))
+        else:
+            factors.append(float(share * BETWEEN_SHARE))
+    return factors
 
 
 def interleave(points, levels=LEVELS):
@@ -96,7 +135,7 @@ def progressive_problem(
         for end in ends[:-1]
     ] + [full]
     slices = [slice(0, int(end)) for end in ends]
-    factors = [(end / n_points) ** LEVEL_POWER for end in ends]
+    factors = level_factors(ends)
     objective = MulticlassObjective([part.objective for part in parts], slices, factors)
     return MulticlassProblem(
         domain="torus",
@@ -132,24 +171,76 @@ def progressive_order(centres, counts):
     return order, path_length(centres), path_length(centres[order])
 
 
-def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=None, **options):
-    """``stipple.colour.halftone_colour`` for one ink with nested levels: ``(layers, result, counts)``.
+def progressive_inks(layers, problem, *, levels=LEVELS, **options):
+    """The joint problem of several inks (``stipple.colour.colour_problem``'s ``problem``) with each ink's dots
+    in nested levels: every ink's class term becomes its own levels' terms (``progressive_problem``), the
+    union's term (all inks' dots, the last one) stays.
 
-    ``union_weight`` is ignored (one ink has no union term); ``options`` are ``progressive_problem``'s and
-    ``stipple.halftone.run``'s. ``counts`` are the passes' dots, in array order.
+    Parameters
+    ----------
+    layers : sequence of stipple.colour.Layer
+        The inks that got dots, in the order of ``problem.slices``.
+    problem : stipple.multiclass.MulticlassProblem
+    levels : int
+        Passes per ink (an ink with fewer dots gets one pass per dot).
+    options :
+        ``progressive_problem``'s ``backend``, ``threads``, ``epsilon``, ``hessian``, ``near_field``.
+
+    Returns
+    -------
+    tuple
+        The ``MulticlassProblem`` and each ink's dots per pass, in array order.
     """
-    from .colour import separate
-    from .errors import StippleError
+    inks = [
+        progressive_problem(
+            layer.density, part.stop - part.start, levels=min(levels, part.stop - part.start), **options
+        )
+        for layer, part in zip(layers, problem.slices, strict=True)
+    ]
+    terms, slices, factors = [], [], []
+    for ink, part in zip(inks, problem.slices, strict=True):
+        terms += ink.objective.terms
+        factors += ink.objective.weights
+        slices += [slice(part.start + level.start, part.start + level.stop) for level in ink.slices]
+    union = problem.objective
+    objective = MulticlassObjective([*terms, union.terms[-1]], [*slices, slice(None)], [*factors, union.weights[-1]])
+    nested = replace(
+        problem,
+        objective=objective,
+        stratified=lambda rng, count: np.concatenate([ink.stratified(rng, ink.n_points) for ink in inks]),
+        settle=inks[0].settle,
+        settings={
+            **problem.settings,
+            "order": "progressive",
+            "ink_level_points": [ink.settings["level_points"] for ink in inks],
+        },
+    )
+    return nested, [np.diff([0] + [level.stop for level in ink.slices]) for ink in inks]
+
+
+def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=1.0, **options):
+    """``stipple.colour.halftone_colour`` with each ink's dots in nested levels: ``(layers, result, counts)``.
+
+    One ink is ``progressive_problem``'s (no union term); several are ``progressive_inks``'s, the union's term
+    weighted ``union_weight``. ``options`` are ``progressive_problem``'s and ``stipple.halftone.run``'s.
+    ``counts`` are each ink's dots per pass, in array order (the inks one after another, as ``layers``).
+    """
+    from .colour import colour_problem, separate
     from .halftone import run
     from .io.images import load_colour
 
-    layers = separate(rgb if isinstance(rgb, np.ndarray) else load_colour(rgb), separation, black)
-    if len(layers) != 1:
-        raise StippleError(f"--order progressive is for one ink (gray or one pen), not {len(layers)} inks")
+    rgb = rgb if isinstance(rgb, np.ndarray) else load_colour(rgb)
     keys = ("backend", "threads", "epsilon", "hessian", "near_field", "levels")
     settings = {key: options.pop(key) for key in keys if key in options}
-    problem = progressive_problem(layers[0].density, n_points, **settings)
-    counts = np.diff([0] + [part.stop for part in problem.slices])
+    layers = separate(rgb, separation, black)
+    if len(layers) == 1:
+        problem = progressive_problem(layers[0].density, n_points, **settings)
+        return layers, run(problem, **options), [np.diff([0] + [part.stop for part in problem.slices])]
+    levels = settings.pop("levels", LEVELS)
+    layers, joint = colour_problem(
+        rgb, n_points, separation=separation, black=black, union_weight=union_weight, **settings
+    )
+    problem, counts = progressive_inks(layers, joint, levels=levels, **settings)
     return layers, run(problem, **options), counts
 
 

@@ -32,22 +32,27 @@ def pen_layers(
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
     together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
     nearest dot, and every dot lies inside the image (``stipple.render.dots.flat_dots``). ``order`` "path" draws
-    each layer along one short pen path, "progressive" (one ink) in passes (``stipple.progressive``).
+    each layer along one short pen path, "progressive" in passes, each layer's own (``stipple.progressive``).
     """
-    counts, palette = None, parse_palette(separation)
+    palette = parse_palette(separation)
     if order == "progressive":
         layers, result, counts = progressive_colour(image, n_points, separation=palette, **options)
-        inks = [(layers[0].name, layers[0].colour, result.points)]
-        ink = layers[0].density.mean()
+        ends = np.cumsum([sum(passes) for passes in counts])
+        inks = [
+            (layer.name, layer.colour, result.points[end - sum(passes) : end])
+            for layer, passes, end in zip(layers, counts, ends, strict=True)
+        ]
+        ink = sum(layer.density for layer in layers).mean()
     else:
         layers, problem, result = halftone_colour(image, n_points, separation=palette, **options)
         inks, ink = ink_layers(layers, problem, result)
+        counts = [None] * len(inks)
     rows, columns = layers[0].density.shape
     scale = width / columns
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
     placed = [(name, colour, points * np.array([columns, rows]) * scale) for name, colour, points in inks]
     dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
-    dots = [order_dots(d, order, counts) for d in dots]
+    dots = [order_dots(d, order, passes) for d, passes in zip(dots, counts, strict=True)]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
 
@@ -83,7 +88,7 @@ def pen_layers(
     "--order",
     type=click.Choice(["path", "progressive"]),
     default=None,
-    help="Each layer along one short pen path, or (one ink) in passes whose every prefix is an even stipple.",
+    help="Each layer along one short pen path, or in passes whose every prefix is an even stipple of its ink.",
 )
 @vpype_cli.global_processor
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
