@@ -21,6 +21,9 @@ from .picture import SIGMAS, floyd_steinberg, mean_chroma, measure_picture
 
 # Mean CIELAB chroma above which an input is measured in colour: a gray JPEG's noise stays well below it.
 GRAY_CHROMA = 2.0
+# The torus problems that measure points: transforms to 1e-10 at the full default bandwidth; measuring needs no
+# metric, so the density-scaled one's stiffness field is not made.
+MEASURE_OPTIONS = {"epsilon": 1e-10, "bandwidth_factor": 1.0, "precondition": False}
 
 
 def evaluation_report(
@@ -59,7 +62,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
             input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
         )
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
-        problem = torus_problem(weights, len(points), bandwidth, epsilon=1e-10, bandwidth_factor=1.0)
+        problem = torus_problem(weights, len(points), bandwidth, **MEASURE_OPTIONS)
         return {**evaluate_torus(problem, unit, weights), **outside(points, weights.shape)}
     density = sphere_density(
         input_source,
@@ -96,9 +99,7 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     rows, columns = rgb.shape[:2]
     unit = np.mod(pixels / np.array([columns, rows]), 1.0)
     union = sum(layer.density for layer in layers)
-    report = evaluate_torus(
-        torus_problem(union, len(unit), bandwidth, epsilon=1e-10, bandwidth_factor=1.0), unit, union
-    )
+    report = evaluate_torus(torus_problem(union, len(unit), bandwidth, **MEASURE_OPTIONS), unit, union)
     report.update(outside(pixels, rgb.shape))
     report["classes"] = []
     for layer in layers:
@@ -107,7 +108,7 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
         entry = {"name": layer.name, "points": count, "mass_share": share, "quota": share * len(unit)}
         if count >= 2:
             band = None if bandwidth is None else class_bandwidth(bandwidth, count, len(unit))
-            problem = torus_problem(layer.density, count, band, epsilon=1e-10, bandwidth_factor=1.0)
+            problem = torus_problem(layer.density, count, band, **MEASURE_OPTIONS)
             measured = evaluate_torus(problem, unit[chosen], layer.density)
             entry.update({key: measured[key] for key in ("bandwidth", "energy", "energy_ratio_to_iid")})
             entry["neighbour_distance_over_hexagonal"] = measured.get("neighbour_distance_over_hexagonal")
