@@ -13,13 +13,23 @@ It times ``blue_sampler.sample_points(N=M, D=2, targets=IMAGE)`` (its default me
 
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
 
-def main(image, count, output):
+def import_blue_sampler():
+    """The package, not this script: Python puts the script's folder first on the path, and its name is the same."""
+    here = Path(__file__).resolve().parent
+    sys.path[:] = [entry for entry in sys.path if Path(entry or ".").resolve() != here]
     import blue_sampler
+
+    return blue_sampler
+
+
+def main(image, count, output):
+    blue_sampler = import_blue_sampler()
 
     width, height = Image.open(image).size
     started = time.perf_counter()
