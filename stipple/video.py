@@ -25,6 +25,7 @@ from .errors import StippleError
 from .halftone import check_integer, correct_low_frequencies, run
 from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
 from .manifolds import PinnedTorus
+from .sampling import pixel_indices
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
 from .video_inks import Inks
 
@@ -239,9 +240,7 @@ def free_dots(points, reference, weights, settings):
         pr : pr + rows, pc : pc + columns
     ]
     near = changed.any() & (distance <= settings.free_margin * spacing)
-    j = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
-    i = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
-    return near[i, j], np.where(near, weights, reference)
+    return near[pixel_indices(points, (rows, columns))], np.where(near, weights, reference)
 
 
 def frame_change(before, weights, n_points):

@@ -59,8 +59,7 @@ def periodic_blur(image, sigma):
 def dot_density(points, shape, mass):
     """Dots binned on the pixel grid, each carrying ``mass / M`` (same units as the density)."""
     rows, columns = shape
-    column = np.minimum((points[:, 0] * columns).astype(int), columns - 1)
-    row = np.minimum((points[:, 1] * rows).astype(int), rows - 1)
+    row, column = pixel_indices(points, shape)
     counts = np.bincount(row * columns + column, minlength=rows * columns).reshape(shape)
     return counts * (mass * rows * columns / len(points))
 
