@@ -124,6 +124,24 @@ def class_bandwidth(bandwidth, class_points, n_points):
     return max(2, int(2 * round(bandwidth * np.sqrt(class_points / n_points) / 2)))
 
 
+# The terms' problems keep the flat metric and the full default bandwidth: the classes' run stops by ``tol``, whose
+# meaning the density-scaled metric would change, and neither was measured on colour (docs/performance.md) or on
+# the progressive order's levels (docs/plotters.md).
+TERM_SETTINGS = {"precondition": False, "bandwidth_factor": 1.0}
+
+
+def term_problem(density, count, n_points, bandwidth, options):
+    """The torus problem of one term: ``count`` of the ``n_points`` dots on ``density``, at its own default
+    bandwidth, or ``class_bandwidth`` of the whole set's ``bandwidth`` when given; ``options`` are
+    ``torus_problem``'s, with ``TERM_SETTINGS``."""
+    band = (
+        default_bandwidth(int(count), density)
+        if bandwidth is None
+        else class_bandwidth(check_bandwidth(bandwidth), count, n_points)
+    )
+    return torus_problem(density, int(count), band, **options, **TERM_SETTINGS)
+
+
 def multiclass_problem(
     densities,
     n_points,
@@ -185,19 +203,9 @@ def multiclass_problem(
         shares = np.where(masses > 0, (counts / n_points) * masses.sum() / np.maximum(masses, 1e-300), 0.0)
         union_density = sum(share * weights for share, weights in zip(shares, densities, strict=True))
     kept = [index for index, count in enumerate(counts) if count > 0]
-    # The flat metric and the full default bandwidth: the classes' run stops by ``tol``, whose meaning the
-    # density-scaled metric would change, and neither was measured on colour (docs/performance.md).
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
-    options.update(precondition=False, bandwidth_factor=1.0)
-    union = torus_problem(union_density, n_points, bandwidth, **options)
-    classes = []
-    for index in kept:
-        class_band = (
-            default_bandwidth(int(counts[index]), densities[index])
-            if bandwidth is None
-            else class_bandwidth(check_bandwidth(bandwidth), counts[index], n_points)
-        )
-        classes.append(torus_problem(densities[index], int(counts[index]), class_band, **options))
+    union = torus_problem(union_density, n_points, bandwidth, **options, **TERM_SETTINGS)
+    classes = [term_problem(densities[index], counts[index], n_points, bandwidth, options) for index in kept]
     slices = class_slices(counts[kept])
     weights = [term_weights[index] for index in kept] + [term_weights[-1]]
     terms = [part.objective for part in classes] + [union.objective]

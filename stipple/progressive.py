@@ -33,9 +33,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .multiclass import MulticlassObjective, MulticlassProblem, class_bandwidth
+from .multiclass import TERM_SETTINGS, MulticlassObjective, MulticlassProblem, term_problem
 from .render.pen import path_length, plotter_order
-from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
+from .torus import DEFAULT_EPSILON, torus_problem
 
 LEVELS = 4
 # A level between the doublings counts this fraction of its share of the dots (see the module docstring).
@@ -120,20 +120,9 @@ def progressive_problem(
     if not (isinstance(levels, (int, np.integer)) and 1 <= levels <= max(int(n_points), 1)):
         raise StippleError(f"levels must be an integer in [1, M = {n_points}], not {levels!r}")
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
-    # The flat metric and the full default bandwidth, as for the classes of ``multiclass_problem``: the levels'
-    # weighting was measured with them (docs/plotters.md), the density-scaled metric was not.
-    options.update(precondition=False, bandwidth_factor=1.0)
-    full = torus_problem(weights, n_points, bandwidth, **options)
+    full = torus_problem(weights, n_points, bandwidth, **options, **TERM_SETTINGS)
     ends = np.cumsum(pass_counts(n_points, levels))
-    parts = [
-        torus_problem(
-            weights,
-            int(end),
-            default_bandwidth(int(end), weights) if bandwidth is None else class_bandwidth(bandwidth, end, n_points),
-            **options,
-        )
-        for end in ends[:-1]
-    ] + [full]
+    parts = [term_problem(weights, end, n_points, bandwidth, options) for end in ends[:-1]] + [full]
     slices = [slice(0, int(end)) for end in ends]
     factors = level_factors(ends)
     objective = MulticlassObjective([part.objective for part in parts], slices, factors)
