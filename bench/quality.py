@@ -170,7 +170,7 @@ def evaluate(domain, input_path, points_path, count):
     from stipple.sphere import CellMap, sphere_problem
 
     density = CellMap(load_density(str(input_path), value_range=(0.0, 1.0)))
-    problem = sphere_problem(density, len(points), None, epsilon=1e-12)
+    problem = sphere_problem(density, len(points), None, epsilon=1e-12, precondition=False, bandwidth_factor=1.0)
     return evaluate_sphere(problem, points, density), points, density.values
 
 

@@ -49,6 +49,23 @@ class Torus:
         return rng.random((count, 2))
 
 
+class PointFactors:
+    """A factor per point from a lookup, kept for the last ``points`` array, which CG asks about several times per
+    iteration (read-only): the per-dot scale of ``ScaledTorus`` and ``ScaledSphere``."""
+
+    def __init__(self, lookup):
+        self.lookup = lookup
+        self._cached = None
+
+    def __call__(self, points):
+        if self._cached is not None and self._cached[0] is points:
+            return self._cached[1]
+        values = np.asarray(self.lookup(points), dtype=float)
+        values.flags.writeable = False
+        self._cached = (points, values)
+        return values
+
+
 class ScaledTorus(Torus):
     """The torus with the metric scaled at every point by a factor read from a field over the image's cells.
 
@@ -70,17 +87,7 @@ class ScaledTorus(Torus):
         self.field = np.asarray(field, dtype=float)
         if self.field.ndim != 2 or not np.all(np.isfinite(self.field)) or not np.all(self.field > 0):
             raise ValueError("field must be a 2-D array of positive numbers")
-        self._cached = None
-
-    def factor(self, points):
-        """``f`` at each point (the value of the cell that contains it); kept for the last ``points`` array,
-        which CG asks about several times per iteration (read-only)."""
-        if self._cached is not None and self._cached[0] is points:
-            return self._cached[1]
-        values = self.field[pixel_indices(points, self.field.shape)]
-        values.flags.writeable = False
-        self._cached = (points, values)
-        return values
+        self.factor = PointFactors(lambda points: self.field[pixel_indices(points, self.field.shape)])
 
     def inner(self, points, u, v):
         return float(np.einsum("i,ij,ij->j", self.factor(points), u, v) @ self._metric)
@@ -153,6 +160,26 @@ class Sphere:
     def random(self, rng, count):
         points = rng.standard_normal((count, 3))
         return points / np.linalg.norm(points, axis=1, keepdims=True)
+
+
+class ScaledSphere(Sphere):
+    """The sphere with the metric scaled at every point, ``<u, v> = sum_i f(p_i) u_i . v_i``: CG preconditioned per
+    dot, as on the torus (``ScaledTorus``; ``f`` from ``stipple.sphere.stiffness_map``).
+
+    Parameters
+    ----------
+    factor_at : callable
+        ``(M, 3)`` unit vectors -> ``(M,)`` positive factors.
+    """
+
+    def __init__(self, factor_at):
+        self.factor = PointFactors(factor_at)
+
+    def inner(self, points, u, v):
+        return float(np.einsum("i,ij,ij->", self.factor(points), u, v))
+
+    def riesz(self, points, covector):
+        return self.project(points, covector) / self.factor(points)[:, None]
 
 
 class Rectangle(Torus):

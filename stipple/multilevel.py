@@ -24,8 +24,10 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .manifolds import Sphere
 from .optimize import minimize, time_left
 from .sampling import hilbert_index
+from .transforms import spherical_angles
 
 # Dots per level: each coarser level has 1/RATIO of the dots of the next (4: half the spacing, half the N).
 RATIO = 4
@@ -105,10 +107,16 @@ def lattice_vectors(points, scale, threads=1):
     _, index = tree.query(positions, k=neighbours, workers=threads)
     delta = positions[index[:, 1:]] - positions[:, None, :]
     delta -= scale * np.rint(delta / scale)
+    return neighbour_pair(delta)
+
+
+def neighbour_pair(delta):
+    """From the vectors to each dot's nearest neighbours, nearest first (``(dots, k, dim)``): the first, and the
+    one of the others whose direction is closest to a right angle to it."""
     first = delta[:, 0]
     length = np.linalg.norm(delta, axis=2)
     cosine = np.abs(np.einsum("ij,ikj->ik", first, delta[:, 1:])) / np.maximum(length[:, :1] * length[:, 1:], 1e-300)
-    second = delta[np.arange(len(points)), 1 + np.argmin(cosine, axis=1)]
+    second = delta[np.arange(len(delta)), 1 + np.argmin(cosine, axis=1)]
     return first, second
 
 
@@ -117,17 +125,23 @@ def lattice_children(points, counts, scale, threads=1):
     vectors, shifted by a quarter of both (so that four children sit symmetrically around it). Unit coordinates,
     the children of dot ``c`` consecutive, in dot order."""
     scale = np.asarray(scale, dtype=float)
-    first, second = lattice_vectors(points, scale, threads)
+    owner, chosen = lattice_offsets(*lattice_vectors(points, scale, threads), counts)
+    return np.mod(points[owner] + chosen / scale, 1.0)
+
+
+def lattice_offsets(first, second, counts):
+    """The offsets of each dot's ``counts`` children from it, nearest first, on the lattice spanned by half its
+    neighbour vectors ``first`` and ``second`` shifted by a quarter of both: ``(owner, offsets)``, the children
+    of dot ``c`` consecutive, in dot order."""
     steps = np.arange(-LATTICE_REACH, LATTICE_REACH) + 0.5
     i, j = (grid.ravel() for grid in np.meshgrid(steps, steps))
-    # (dots, candidates, 2) offsets in physical units.
+    # (dots, candidates, dim) offsets.
     offsets = (i[None, :, None] * first[:, None, :] + j[None, :, None] * second[:, None, :]) / 2
     rank = np.argsort(np.einsum("ijk,ijk->ij", offsets, offsets), axis=1, kind="stable")
-    owner = np.repeat(np.arange(len(points)), counts)
+    owner = np.repeat(np.arange(len(first)), counts)
     within = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
     within = np.minimum(within, rank.shape[1] - 1)
-    chosen = offsets[owner, rank[owner, within]]
-    return np.mod(points[owner] + chosen / scale, 1.0)
+    return owner, offsets[owner, rank[owner, within]]
 
 
 def split_points(weights, points, n_points, scale, threads=1):
@@ -136,6 +150,39 @@ def split_points(weights, points, n_points, scale, threads=1):
     consecutive, in dot order."""
     counts = shares(cell_masses(weights, points, scale, threads=threads), points, n_points)
     return lattice_children(points, counts, scale, threads)
+
+
+def sphere_cell_masses(cells, points, samples_per_cell=SAMPLES_PER_CELL, threads=1):
+    """``cell_masses`` on the sphere: the mass of the cell map ``cells`` (``stipple.sphere_density.CellMap``) in
+    the spherical Voronoi cell of each of ``points`` (unit vectors), as fractions; every map cell is cut into
+    ``f x f`` sub-cells, each of whose mass goes to the dot nearest to its centre."""
+    factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / cells.values.size))))
+    fine = type(cells)(np.repeat(np.repeat(cells.values, factor, axis=0), factor, axis=1), cells.lon0)
+    centres, sub_masses = fine.centres_and_masses()
+    inked = sub_masses > 0
+    _, owner = cKDTree(points).query(centres[inked], workers=threads)
+    masses = np.bincount(owner, weights=sub_masses[inked], minlength=len(points))
+    return masses / masses.sum()
+
+
+def sphere_lattice_children(points, counts, threads=1):
+    """``lattice_children`` on the sphere: the lattice of each dot's two neighbour vectors projected onto its
+    tangent plane, each child at the end of its offset's geodesic (unit vectors)."""
+    neighbours = min(7, len(points))
+    _, index = cKDTree(points).query(points, k=neighbours, workers=threads)
+    delta = points[index[:, 1:]] - points[:, None, :]
+    delta -= np.einsum("ikj,ij->ik", delta, points)[:, :, None] * points[:, None, :]
+    owner, chosen = lattice_offsets(*neighbour_pair(delta), counts)
+    return Sphere().retract(points[owner], chosen)
+
+
+def split_sphere_points(cells, points, n_points, threads=1):
+    """``split_points`` on the sphere: ``n_points`` unit vectors from the coarse ``points`` on the cell map
+    ``cells`` (shares along a Hilbert curve through longitude and colatitude)."""
+    theta, phi = spherical_angles(points)
+    curve = np.stack([np.mod(phi / (2 * np.pi), 1.0), theta / np.pi], axis=1)
+    counts = shares(sphere_cell_masses(cells, points, threads=threads), curve, n_points)
+    return sphere_lattice_children(points, counts, threads)
 
 
 def coarse_to_fine(problem, rng, *, time_limit=None, callback=None, iterations=LEVEL_ITERATIONS, smallest=None):

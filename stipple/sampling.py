@@ -52,12 +52,19 @@ def stratified_sample(weights, rng, count):
     and hence every region the curve fills, gets its share of the dots to within one. Within a pixel the position
     is uniform, so there is no lattice for the optimiser to inherit.
     """
+    return _points_in_cells(weights, rng, stratified_cells(weights, rng, count))
+
+
+def stratified_cells(weights, rng, count):
+    """The cells (flat indices of ``weights``) of ``count`` points stratified along a Hilbert curve through the
+    cells: point ``i`` in the ``i``-th of ``count`` equal slices of the mass along the curve
+    (``stratified_sample``; the sphere's maps place their points in the cells themselves)."""
     rows, columns = weights.shape
     order = max(1, int(np.ceil(np.log2(max(rows, columns)))))
     row, column = np.divmod(np.arange(weights.size), columns)
     along_curve = np.argsort(hilbert_index(column, row, order), kind="stable")
     fractions = (np.arange(count) + rng.random(count)) / count
-    return _points_in_cells(weights, rng, _cells_at(weights, along_curve, fractions))
+    return _cells_at(weights, along_curve, fractions)
 
 
 def _cells_at(weights, cell_order, fractions):

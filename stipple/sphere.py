@@ -1,10 +1,9 @@
 """Halftoning on the sphere: exact coefficients of cell maps and analytic densities, the distance kernel."""
 
-import functools
 import os
+from functools import partial
 
 import numpy as np
-from scipy.special import roots_legendre
 
 from .errors import StippleError
 from .halftone import (
@@ -20,12 +19,22 @@ from .halftone import (
     peak_ratio,
     run,
 )
-from .io.images import check_grid, load_density, load_input
+from .io.images import load_density, load_input
 from .kernels import NearKernel, chord_profile, sphere_kernel
-from .manifolds import Sphere
+from .manifolds import ScaledSphere, Sphere
+from .multilevel import split_sphere_points
 from .nearfield import NearField, SpherePairs
 from .objective import Discrepancy, SumObjective
-from .torus import cell_factor
+from .sphere_density import (
+    AnalyticDensity,
+    CellMap,
+    UniformDensity,
+    density_at,
+    local_density,
+    unit_vectors,
+)
+from .spread import spread_close_sphere
+from .torus import SOLVE_BANDWIDTH_FACTOR, check_bandwidth_factor, stiffness
 from .transforms import SphereFourier, alm_degrees_orders, spherical_angles
 
 DEFAULT_EPSILON = 1e-10
@@ -40,6 +49,8 @@ MODES_PER_SPACING = 8.52
 # highest frequency rho_max = N / (2 pi) of degree N).
 NEAR_FIELD_REACH = 3 * np.pi
 NEAR_FIELD_SPACINGS = 5.0
+# Maps stop when 20 iterations gain less than this fraction of the energy (``stipple.halftone.run``'s settle).
+MAP_SETTLE = 3e-3
 
 
 def default_bandwidth(n_points, density=None):
@@ -80,154 +91,17 @@ def check_degree(bandwidth):
     return check_integer("bandwidth (degree)", bandwidth, 1, MAX_BANDWIDTH)
 
 
-class CellMap:
-    """A density constant on the cells of an equirectangular map.
+def stiffness_map(density, n_points):
+    """The metric's factor per cell (``stipple.manifolds.ScaledSphere``), as on the torus
+    (``stipple.torus.stiffness_field``): the density's cell map blurred at one dot spacing (along the rows in
+    latitude, periodically along the columns), over its mean (``stipple.torus.stiffness``); a ``CellMap``."""
+    from scipy.ndimage import gaussian_filter
 
-    Row 0 is the band next to the north pole (``theta in [0, pi/H]``); column ``j`` covers longitudes
-    ``[lon0 + 360 j / W, lon0 + 360 (j+1) / W)`` degrees east.
-    """
-
-    def __init__(self, values, lon0=0.0):
-        self.values = check_grid(np.asarray(values, dtype=np.float64), "map")
-        if np.any(self.values < 0):
-            raise StippleError("map: density must be non-negative")
-        self.lon0 = float(lon0)
-        rows, columns = self.values.shape
-        edges = np.cos(np.linspace(0, np.pi, rows + 1))
-        self.cell_areas = np.outer(edges[:-1] - edges[1:], np.full(columns, 2 * np.pi / columns))
-        if not np.sum(self.values * self.cell_areas) > 0:
-            raise StippleError("map: density is zero everywhere; there is nothing to place dots on")
-
-    @property
-    def mean(self):
-        """Area-weighted mean of the density (its mass over 4 pi)."""
-        return float(np.sum(self.values * self.cell_areas) / (4 * np.pi))
-
-    def coefficients(self, lmax, threads=1):
-        """Exact ``w_nm = int w conj(Y_nm)`` of the cell-constant map, ``0 <= m <= n <= lmax``.
-
-        Exact in longitude (row FFT times the cell factor); in colatitude each band is integrated by
-        Gauss-Legendre in theta with enough nodes for the trigonometric polynomial ``Y_nm sin(theta)``,
-        then ``ducc0.sht.leg2alm`` sums the Legendre functions over all nodes.
-        """
-        import ducc0
-
-        rows, columns = self.values.shape
-        orders = np.arange(lmax + 1)
-        row_spectra = np.fft.fft(self.values, axis=1)[:, orders % columns]
-        phase = np.exp(-1j * orders * np.radians(self.lon0)) * cell_factor(orders, columns) * 2 * np.pi / columns
-        nodes_per_band = int(np.ceil((lmax + 2) * np.pi / rows / 2)) + 10
-        nodes, weights = roots_legendre(nodes_per_band)
-        half = np.pi / rows / 2
-        theta = (np.arange(rows)[:, None] * 2 + 1) * half + half * nodes[None, :]
-        ring_weights = half * weights[None, :] * np.sin(theta)
-        leg = (ring_weights[:, :, None] * (row_spectra * phase)[:, None, :]).reshape(1, -1, lmax + 1)
-        return ducc0.sht.leg2alm(leg=leg, lmax=lmax, theta=theta.ravel(), spin=0, nthreads=threads)[0]
-
-    def cell_map(self):
-        """The map itself (densities share this interface for sampling and cap masses)."""
-        return self
-
-    def at(self, longitude, latitude):
-        """The density at ``(longitude, latitude)`` degrees (arrays of one shape): the value of their cell."""
-        rows, columns = self.values.shape
-        row = np.clip(np.floor((90.0 - np.asarray(latitude)) / 180.0 * rows), 0, rows - 1).astype(int)
-        column = np.floor(np.mod(np.asarray(longitude) - self.lon0, 360.0) / 360.0 * columns).astype(int)
-        return self.values[row, np.minimum(column, columns - 1)]
-
-    def centres_and_masses(self):
-        """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
-        rows, columns = self.values.shape
-        theta = (np.arange(rows) + 0.5) * np.pi / rows
-        phi = np.radians(self.lon0) + (np.arange(columns) + 0.5) * 2 * np.pi / columns
-        centres = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
-        return centres.reshape(-1, 3), (self.values * self.cell_areas).ravel()
-
-    def sample(self, rng, count):
-        """I.i.d. points from the cell-constant density: a cell by its mass, then uniform in area."""
-        rows, columns = self.values.shape
-        mass = np.cumsum((self.values * self.cell_areas).ravel())
-        cells = np.minimum(np.searchsorted(mass, rng.random(count) * mass[-1], side="right"), mass.size - 1)
-        row, column = np.divmod(cells, columns)
-        top, bottom = np.cos(row * np.pi / rows), np.cos((row + 1) * np.pi / rows)
-        z = bottom + (top - bottom) * rng.random(count)
-        phi = np.radians(self.lon0) + 2 * np.pi * (column + rng.random(count)) / columns
-        return unit_vectors(z, phi)
-
-
-class AnalyticDensity:
-    """A smooth density given as a function of unit vectors ``(M, 3) -> (M,)``."""
-
-    def __init__(self, function, name="density"):
-        self.function = function
-        self.name = name
-
-    def _grid(self, lmax):
-        """Gauss-Legendre rings and equispaced longitudes, exact for degree ``2 * lmax``."""
-        rings = 2 * lmax + 2
-        theta = np.arccos(-roots_legendre(rings)[0])
-        phi = 2 * np.pi * np.arange(2 * rings) / (2 * rings)
-        points = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
-        return theta, phi, self.function(points.reshape(-1, 3)).reshape(len(theta), len(phi))
-
-    @property
-    def mean(self):
-        return float(self.cell_map().mean)
-
-    def coefficients(self, lmax, threads=1):
-        """``w_nm`` by Gauss-Legendre quadrature on a grid of degree ``2 lmax`` (at least 512)."""
-        import ducc0
-
-        theta, phi, values = self._grid(max(lmax, 256))
-        if not np.all(np.isfinite(values)) or np.any(values < 0):
-            raise StippleError(f"{self.name}: density must be finite and non-negative")
-        weighted = values * _gauss_weights(len(theta))[:, None] * 2 * np.pi / len(phi)
-        return ducc0.sht.adjoint_synthesis_2d(map=weighted[None], lmax=lmax, spin=0, geometry="GL", nthreads=threads)[0]
-
-    @functools.cached_property
-    def _cells(self):
-        rows = 360
-        latitudes = (np.arange(rows) + 0.5) * np.pi / rows
-        longitudes = (np.arange(2 * rows) + 0.5) * np.pi / rows
-        z, phi = np.cos(latitudes)[:, None] + 0 * longitudes, longitudes[None, :] + 0 * latitudes[:, None]
-        return CellMap(self.function(unit_vectors(z.ravel(), phi.ravel())).reshape(rows, 2 * rows))
-
-    def cell_map(self):
-        """The density on a 0.5° cell grid (for sampling starts and cap masses), evaluated once."""
-        return self._cells
-
-    def sample(self, rng, count):
-        """Approximately i.i.d. from the density (its values on a 0.5° grid), good for a start."""
-        return self.cell_map().sample(rng, count)
-
-
-def _gauss_weights(rings):
-    return roots_legendre(rings)[1]
-
-
-class UniformDensity(AnalyticDensity):
-    """``w ≡ 1``: numerical spherical designs."""
-
-    def __init__(self):
-        super().__init__(lambda points: np.ones(len(points)), "uniform")
-
-    @property
-    def mean(self):
-        return 1.0
-
-    def coefficients(self, lmax, threads=1):
-        coeffs = np.zeros((lmax + 1) * (lmax + 2) // 2, dtype=np.complex128)
-        coeffs[0] = np.sqrt(4 * np.pi)
-        return coeffs
-
-    def sample(self, rng, count):
-        return Sphere().random(rng, count)
-
-
-def unit_vectors(z, phi):
-    """Unit vectors from height ``z = cos(theta)`` and longitude ``phi`` (radians)."""
-    radius = np.sqrt(np.clip(1 - z**2, 0, None))
-    return np.stack([radius * np.cos(phi), radius * np.sin(phi), z], axis=-1)
+    cells = density.cell_map()
+    rows = cells.values.shape[0]
+    spacing = hexagonal_spacing(n_points, 4 * np.pi) / (np.pi / rows)
+    blurred = gaussian_filter(np.asarray(cells.values, dtype=float), max(spacing, 0.5), mode=("nearest", "wrap"))
+    return CellMap(stiffness(blurred, density.mean), cells.lon0)
 
 
 def lon_lat(points):
@@ -264,41 +138,61 @@ def sphere_problem(
     threads=None,
     epsilon=None,
     near_field=None,
+    precondition=True,
+    bandwidth_factor=SOLVE_BANDWIDTH_FACTOR,
 ):
-    """The halftoning problem of ``weights`` (see ``halftone_sphere``) with ``n_points`` dots on S²."""
+    """The halftoning problem of ``weights`` (see ``halftone_sphere``) with ``n_points`` dots on S².
+
+    A map with the distance kernel and its near field (the default for maps) is solved as on the torus: without a
+    ``bandwidth`` at ``bandwidth_factor`` times ``default_bandwidth`` (the near field keeps the objective
+    untruncated at any N), with ``precondition`` in the metric scaled by ``stiffness_map``, from the
+    coarse-to-fine start where ``run`` starts "stratified" (``level`` and ``split``), ending with the spread step
+    (``stipple.spread.spread_close_sphere``) and stopping by ``settle`` (``MAP_SETTLE``). Designs and the Sobolev
+    kernel keep their bandwidth, the plain metric and their start.
+    """
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
-    bandwidth = check_degree(default_bandwidth(n_points, density) if bandwidth is None else bandwidth)
     kernel = default_kernel(density, n_points) if kernel is None else kernel
-    if epsilon is None:
-        epsilon = DESIGN_EPSILON if kernel.startswith("distance+design") else DEFAULT_EPSILON
     near_field = kernel.startswith("distance") if near_field is None else bool(near_field)
     if near_field and not kernel.startswith("distance"):
         raise StippleError(f"the near field needs the distance kernel, not {kernel!r}")
+    picture = near_field and kernel == "distance"
+    if bandwidth is None:
+        bandwidth = default_bandwidth(n_points, density)
+        if picture:
+            bandwidth = int(np.ceil(bandwidth * check_bandwidth_factor(bandwidth_factor)))
+    bandwidth = check_degree(bandwidth)
+    if epsilon is None:
+        epsilon = DESIGN_EPSILON if kernel.startswith("distance+design") else DEFAULT_EPSILON
     # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
     check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
-    epsilon = check_epsilon(epsilon)
-    target = density.coefficients(bandwidth, threads)
-    degrees, _ = alm_degrees_orders(bandwidth)
-    kernel_coeffs = sphere_kernel(kernel, degrees)
-    fourier = SphereFourier(bandwidth, epsilon, threads)
-    weight = target[0].real * np.sqrt(4 * np.pi) / n_points
-    if near_field:
-        near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
-        cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
-        discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
-        objective = SumObjective(discrepancy, NearField(near, weight, SpherePairs(), threads=threads))
-    else:
-        objective = discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
+    objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, epsilon)
+    scaled = picture and precondition
+    manifold = ScaledSphere(partial(density_at, stiffness_map(density, n_points))) if scaled else Sphere()
+    # The same map with other counts: the coarse-to-fine start's levels (``stipple.multilevel``).
+    same = partial(
+        sphere_problem,
+        density,
+        kernel=kernel,
+        threads=threads,
+        epsilon=epsilon,
+        precondition=precondition,
+        bandwidth_factor=bandwidth_factor,
+    )
     return Problem(
         domain="sphere",
-        manifold=Sphere(),
+        manifold=manifold,
         objective=objective,
         discrepancy=discrepancy,
         n_points=n_points,
         bandwidth=bandwidth,
         sample=density.sample,
+        settle=MAP_SETTLE if picture else 0.0,
+        stratified=density.stratified if picture else None,
+        level=same if picture else None,
+        split=partial(split_sphere_points, density.cell_map(), threads=threads) if picture else None,
+        spread=(lambda points: spread_close_sphere(points, local_density(density, points))) if picture else None,
         settings={
             "domain": "sphere",
             "points": n_points,
@@ -306,8 +200,27 @@ def sphere_problem(
             "kernel": kernel,
             "near_field": near_field,
             "hessian": "gauss-newton",
+            "metric": "density" if scaled else "flat",
         },
     )
+
+
+def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, epsilon):
+    """``(objective, discrepancy)`` of ``n_points`` dots on ``density`` at degree ``bandwidth``: the kernel's
+    discrepancy, with the near field of the distance kernel added where asked."""
+    epsilon = check_epsilon(epsilon)
+    target = density.coefficients(bandwidth, threads)
+    degrees, _ = alm_degrees_orders(bandwidth)
+    kernel_coeffs = sphere_kernel(kernel, degrees)
+    fourier = SphereFourier(bandwidth, epsilon, threads)
+    weight = target[0].real * np.sqrt(4 * np.pi) / n_points
+    if not near_field:
+        discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
+        return discrepancy, discrepancy
+    near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
+    cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
+    discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
+    return SumObjective(discrepancy, NearField(near, weight, SpherePairs(), threads=threads)), discrepancy
 
 
 def halftone_sphere(

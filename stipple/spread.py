@@ -51,13 +51,58 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     """
     rows, columns = weights.shape
     size = np.array([columns, rows], dtype=float)
+
+    def nearest(pixels):
+        distance, neighbour = cKDTree(pixels, boxsize=size).query(pixels, k=2)
+        return distance[:, 1], neighbour[:, 1]
+
+    def step_away(pixels, close, neighbour, distance, length):
+        away = pixels[close] - pixels[neighbour]
+        away -= size * np.rint(away / size)
+        moved = np.mod(pixels[close] + (length / np.maximum(distance, 1e-12))[:, None] * away, size)
+        moved[moved >= size] = 0.0
+        return moved
+
     pixels = pixel_positions(points, weights.shape)
     spacing = hexagonal_spacing_at(points, weights)
+    pixels, moved = spread_apart(pixels, spacing, nearest, step_away, target, passes)
+    return pixels / size, moved
+
+
+def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES):
+    """``spread_close`` on the sphere: ``points`` are ``(M, 3)`` unit vectors, ``local_density`` the dots per
+    steradian at each (``M w(p) / int w``; 0 where the density is), distances geodesic; a dot moves along the
+    great circle away from its nearest neighbour. Returns the new unit vectors and the number moved in the first
+    pass."""
+    with np.errstate(divide="ignore"):
+        spacing = hexagonal_spacing(np.asarray(local_density, dtype=float), 1.0)
+
+    def nearest(vectors):
+        chord, neighbour = cKDTree(vectors).query(vectors, k=2)
+        return 2 * np.arcsin(np.minimum(chord[:, 1] / 2, 1.0)), neighbour[:, 1]
+
+    def step_away(vectors, close, neighbour, distance, length):
+        origin = vectors[close]
+        away = origin - vectors[neighbour]
+        away -= np.einsum("ij,ij->i", away, origin)[:, None] * origin
+        away /= np.maximum(np.linalg.norm(away, axis=1), 1e-300)[:, None]
+        moved = np.cos(length)[:, None] * origin + np.sin(length)[:, None] * away
+        return moved / np.linalg.norm(moved, axis=1)[:, None]
+
+    return spread_apart(np.array(points, dtype=float), spacing, nearest, step_away, target, passes)
+
+
+def spread_apart(positions, spacing, nearest, step_away, target=None, passes=SPREAD_PASSES):
+    """The passes of the spread step on any domain, in place on ``positions``.
+
+    ``nearest(positions) -> (distance, neighbour)`` per dot; ``step_away(positions, close, neighbour, distance,
+    length)`` the new positions of the dots ``close``, each moved by ``length`` away from its ``neighbour``.
+    A dot of infinite ``spacing`` never moves. Returns ``positions`` and the number of dots moved in the first pass.
+    """
     finite = np.isfinite(spacing)
     moved = 0
     for index in range(passes):
-        distance, neighbour = cKDTree(pixels, boxsize=size).query(pixels, k=2)
-        distance, neighbour = distance[:, 1], neighbour[:, 1]
+        distance, neighbour = nearest(positions)
         if target is None:
             ratios = distance[finite] / spacing[finite]
             target = max(SPREAD_TARGET, float(np.percentile(ratios, SPREAD_PERCENTILE))) if ratios.size else 0.0
@@ -66,9 +111,6 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
             moved = close.size
         if close.size == 0:
             break
-        away = pixels[close] - pixels[neighbour[close]]
-        away -= size * np.rint(away / size)
-        step = 0.5 * (target * spacing[close] - distance[close]) / np.maximum(distance[close], 1e-12)
-        pixels[close] = np.mod(pixels[close] + step[:, None] * away, size)
-        pixels[pixels >= size] = 0.0
-    return pixels / size, moved
+        length = 0.5 * (target * spacing[close] - distance[close])
+        positions[close] = step_away(positions, close, neighbour[close], distance[close], length)
+    return positions, moved

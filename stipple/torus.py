@@ -102,7 +102,20 @@ def stiffness_field(weights, n_points):
 
     spacing = hexagonal_spacing(n_points, np.prod(torus_scale(weights.shape))) * max(weights.shape)
     blurred = gaussian_filter(weights, max(spacing, 0.5), mode="wrap")
-    return np.maximum(blurred / blurred.mean(), STIFFNESS_FLOOR) ** STIFFNESS_POWER
+    return stiffness(blurred, blurred.mean())
+
+
+def check_bandwidth_factor(bandwidth_factor):
+    """``bandwidth_factor`` if it is a number in (0, 1], else a ``StippleError`` naming it."""
+    if not (isinstance(bandwidth_factor, (int, float)) and 0 < bandwidth_factor <= 1):
+        raise StippleError(f"bandwidth factor must be a number in (0, 1], not {bandwidth_factor!r}")
+    return bandwidth_factor
+
+
+def stiffness(blurred, mean):
+    """The metric's factor from the density blurred at one dot spacing: ``max(blurred / mean, STIFFNESS_FLOOR) **
+    STIFFNESS_POWER``."""
+    return np.maximum(blurred / mean, STIFFNESS_FLOOR) ** STIFFNESS_POWER
 
 
 def torus_near_kernel(bandwidth, scale):
@@ -202,10 +215,8 @@ def torus_problem(
     n_points = check_count(n_points)
     correction_bandwidth = bandwidth
     if bandwidth is None:
-        if not (isinstance(bandwidth_factor, (int, float)) and 0 < bandwidth_factor <= 1):
-            raise StippleError(f"bandwidth factor must be a number in (0, 1], not {bandwidth_factor!r}")
         correction_bandwidth = default_bandwidth(n_points, weights)
-        bandwidth = even_at_least_2(correction_bandwidth * bandwidth_factor)
+        bandwidth = even_at_least_2(correction_bandwidth * check_bandwidth_factor(bandwidth_factor))
     bandwidth = check_bandwidth(bandwidth)
     # About a dozen complex mode grids (oversampled) and forty real values per point live at once.
     check_memory(12 * 16 * 1.6 * (bandwidth + 1) ** 2 + 40 * 8 * n_points, f"M={n_points}, N={bandwidth}")

@@ -1,15 +1,28 @@
 """The coarse-to-fine start (``stipple.multilevel``) and the density-scaled metric (``ScaledTorus``), each by its
 own property: direct sums against the fast cell masses, exact lattices, the metric's Riesz identity, and energies
-against plain runs."""
+against plain runs; the same transfer on the sphere."""
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from stipple import multilevel
-from stipple.halftone import run
-from stipple.manifolds import ScaledTorus, Torus
-from stipple.multilevel import cell_masses, coarse_to_fine, level_counts, shares, split_points
+from stipple.design import fibonacci_lattice
+from stipple.halftone import hexagonal_spacing, run
+from stipple.manifolds import ScaledTorus, Sphere, Torus
+from stipple.multilevel import (
+    cell_masses,
+    coarse_to_fine,
+    level_counts,
+    shares,
+    sphere_cell_masses,
+    split_points,
+    split_sphere_points,
+)
+from stipple.sphere import sphere_problem
+from stipple.sphere_density import CellMap
 from stipple.torus import stiffness_field, torus_problem, torus_scale
+from stipple.transforms import spherical_angles
 
 
 def brute_force_masses(weights, points, scale, factor):
@@ -155,3 +168,91 @@ def test_coarse_to_fine_start_is_reproducible_and_used_by_default(monkeypatch):
     assert np.array_equal(first.points, second.points)
     plain = run(torus_problem(weights, 1500), iterations=3, correct=False, levels=False)
     assert not np.array_equal(first.points, plain.points)
+
+
+# The sphere: the same transfer on a cell map (``split_sphere_points``).
+
+
+def brute_force_sphere_masses(cells, points, factor):
+    """Each sub-cell's mass (its exact area times the value) given to the nearest point by direct geodesic
+    distances (O(samples x M)); sub-cells equal in colatitude and longitude."""
+    rows, columns = cells.values.shape
+    edges = np.linspace(0, np.pi, rows * factor + 1)
+    theta = (edges[:-1] + edges[1:]) / 2
+    phi = (np.arange(columns * factor) + 0.5) * 2 * np.pi / (columns * factor)
+    areas = (np.cos(edges[:-1]) - np.cos(edges[1:]))[:, None] * np.full(
+        columns * factor, 2 * np.pi / (columns * factor)
+    )
+    tt, pp = np.meshgrid(theta, phi, indexing="ij")
+    centres = np.stack([np.sin(tt) * np.cos(pp), np.sin(tt) * np.sin(pp), np.cos(tt)], axis=-1).reshape(-1, 3)
+    values = np.repeat(np.repeat(cells.values, factor, axis=0), factor, axis=1)
+    owner = np.argmax(centres @ points.T, axis=1)
+    masses = np.bincount(owner, weights=(values * areas).ravel(), minlength=len(points))
+    return masses / masses.sum()
+
+
+def test_sphere_cell_masses_are_the_nearest_point_sums(rng):
+    values = rng.random((9, 18))
+    values[0] = 0.0
+    cells = CellMap(values)
+    points = Sphere().random(rng, 40)
+    factor = int(np.ceil(np.sqrt(16 * len(points) / values.size)))
+    fast = sphere_cell_masses(cells, points)
+    assert np.allclose(fast, brute_force_sphere_masses(cells, points, factor), atol=1e-12)
+    assert fast.sum() == pytest.approx(1.0)
+
+
+def test_sphere_split_keeps_the_mass_in_every_cell_and_children_stay_near(rng):
+    values = rng.random((18, 36)) ** 2
+    values[:4] = 0.0
+    cells = CellMap(values)
+    coarse = cells.sample(rng, 200)
+    fine = split_sphere_points(cells, coarse, 800)
+    assert fine.shape == (800, 3) and np.allclose(np.linalg.norm(fine, axis=1), 1.0, atol=1e-14)
+    theta, phi = spherical_angles(coarse)
+    curve = np.stack([np.mod(phi / (2 * np.pi), 1.0), theta / np.pi], axis=1)
+    counts = shares(sphere_cell_masses(cells, coarse), curve, 800)
+    factor = int(np.ceil(np.sqrt(16 * 200 / values.size)))
+    assert np.all(np.abs(counts - 800 * brute_force_sphere_masses(cells, coarse, factor)) < 1.0 + 1e-9)
+    # The children of a dot are its own, consecutive, and sit around it within a few coarse spacings.
+    owner = np.repeat(np.arange(len(coarse)), counts)
+    assert np.max(np.linalg.norm(fine - coarse[owner], axis=1)) < 4 * hexagonal_spacing(200, 4 * np.pi) * 3
+
+
+def test_sphere_split_of_a_spread_set_on_a_constant_map_gives_four_children_around_each_dot():
+    """A constant density and an (almost) equal-area coarse set: every dot's cell holds a quarter of the children
+    to within one, and four children sit symmetrically around their dot (their mean is the dot, up to the
+    curvature's second-order term)."""
+    cells = CellMap(np.ones((90, 180)))
+    coarse = fibonacci_lattice(500)
+    fine = split_sphere_points(cells, coarse, 2000)
+    theta, phi = spherical_angles(coarse)
+    curve = np.stack([np.mod(phi / (2 * np.pi), 1.0), theta / np.pi], axis=1)
+    counts = shares(sphere_cell_masses(cells, coarse), curve, 2000)
+    assert np.all(np.abs(counts - 4) <= 1)
+    four = np.flatnonzero(counts == 4)
+    starts = np.cumsum(counts) - counts
+    centres = np.stack([fine[s : s + 4].mean(axis=0) for s in starts[four]])
+    spacing = hexagonal_spacing(500, 4 * np.pi)
+    assert np.max(np.linalg.norm(centres - coarse[four], axis=1)) < 0.1 * spacing
+    # The fine set has half the coarse spacing (children of neighbouring dots may nearly meet: CG parts them).
+    nearest = cKDTree(fine).query(fine, k=2)[0][:, 1]
+    assert np.median(nearest) == pytest.approx(hexagonal_spacing(2000, 4 * np.pi), rel=0.2)
+
+
+def test_sphere_maps_start_coarse_to_fine_and_end_no_higher_than_the_stratified_start():
+    values = np.tile(0.2 + 0.8 * np.sin(np.linspace(0, np.pi, 60))[:, None] ** 2, (1, 120))
+    problem = sphere_problem(values, 2400, threads=2)
+    assert problem.level(600).n_points == 600 and problem.level(600).bandwidth < problem.bandwidth
+    start = coarse_to_fine(problem, np.random.default_rng(0), smallest=150)
+    stratified = problem.stratified(np.random.default_rng(0), 2400)
+    energies = []
+    for points in (start, stratified):
+        problem.objective.set_points(points)
+        energies.append(problem.objective.energy())
+    assert energies[0] < 0.7 * energies[1]
+    ends = [run(problem, init=points, iterations=20, settle=0, spread=False).energy for points in (start, stratified)]
+    assert ends[0] <= ends[1]
+    # Designs have no levels: "stratified" is their i.i.d. start, as before.
+    design = sphere_problem(None, 9000, threads=2)
+    assert design.level is None and design.stratified is None

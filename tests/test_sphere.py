@@ -5,16 +5,20 @@ from conftest import taylor_slope
 from scipy.special import roots_legendre
 
 from stipple.halftone import run
-from stipple.manifolds import Sphere
+from stipple.manifolds import ScaledSphere, Sphere
 from stipple.sphere import (
+    MAP_SETTLE,
     AnalyticDensity,
     CellMap,
+    default_bandwidth,
     halftone_sphere,
     lon_lat,
     rbf_node_density,
     sphere_problem,
+    stiffness_map,
     three_gaussians,
 )
+from stipple.torus import SOLVE_BANDWIDTH_FACTOR
 from stipple.transforms import SphereFourier, alm_degrees_orders, spherical_angles, spherical_frame
 
 
@@ -225,9 +229,13 @@ def test_samples_follow_a_cell_map(rng):
     assert np.all((latitude >= 45) & (longitude >= 90) & (longitude <= 135))
 
 
+# From i.i.d. samples, without the settle rule: the energy falls tenfold in 40 iterations.
+IID = {"init": "density", "settle": 0}
+
+
 def test_halftone_sphere_descends_and_is_reproducible():
-    first = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5)
-    second = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5)
+    first = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5, **IID)
+    second = halftone_sphere(three_gaussians, 300, 20, iterations=40, tol=1e-12, threads=1, seed=5, **IID)
     np.testing.assert_array_equal(first.points, second.points)
     assert np.max(np.diff(first.energies) / first.energies[:-1]) < 1e-12
     assert first.energies[-1] < 0.1 * first.energies[0]
@@ -283,3 +291,67 @@ def test_uniform_default_beats_the_fibonacci_lattice_at_low_degrees():
     ours = discrepancy_energy(judge, result.points) / expected_iid_energy(judge)
     lattice = discrepancy_energy(judge, fibonacci_lattice(400)) / expected_iid_energy(judge)
     assert ours < lattice / 5  # the distance kernel alone: lattice / 2.4
+
+
+def test_maps_are_solved_in_the_scaled_metric_at_a_lower_degree_and_designs_are_not():
+    values = np.random.default_rng(5).random((10, 20)) + 0.1
+    picture = sphere_problem(values, 500, threads=1)
+    assert isinstance(picture.manifold, ScaledSphere) and picture.settings["metric"] == "density"
+    assert picture.bandwidth == int(np.ceil(SOLVE_BANDWIDTH_FACTOR * default_bandwidth(500, CellMap(values))))
+    assert picture.settle == MAP_SETTLE and picture.spread is not None
+    flat = sphere_problem(values, 500, threads=1, precondition=False, bandwidth_factor=1.0)
+    assert type(flat.manifold) is Sphere and flat.bandwidth == default_bandwidth(500, CellMap(values))
+    for other in (sphere_problem(None, 500, threads=1), sphere_problem(values, 500, kernel="sobolev:1.5", threads=1)):
+        assert type(other.manifold) is Sphere and other.settle == 0 and other.spread is None
+    assert sphere_problem(None, 500, threads=1).bandwidth == default_bandwidth(500)
+
+
+def test_stiffness_map_is_one_for_a_constant_map_and_grows_with_the_density():
+    assert np.allclose(stiffness_map(CellMap(np.full((12, 24), 0.3)), 1000).values, 1.0, rtol=1e-12)
+    values = np.full((36, 72), 0.1)
+    values[10:16] = 1.0
+    field = stiffness_map(CellMap(values), 5000).values
+    assert field[13].min() > 2 * field[30].max()
+
+
+def test_scaled_sphere_metric_and_its_riesz_map_are_inverse(rng):
+    points = Sphere().random(rng, 50)
+    factors = 0.1 + rng.random(50)
+    manifold = ScaledSphere(lambda p: factors if p is points else None)
+    u, v = (manifold.project(points, rng.standard_normal(points.shape)) for _ in range(2))
+    assert manifold.inner(points, u, v) == pytest.approx(np.sum(factors[:, None] * u * v), rel=1e-13)
+    # <riesz(c), v> is the differential c applied to v, for every tangent v.
+    covector = rng.standard_normal(points.shape)
+    assert manifold.inner(points, manifold.riesz(points, covector), v) == pytest.approx(np.sum(covector * v), rel=1e-12)
+
+
+def test_gradient_in_the_scaled_metric_has_taylor_slope_two(rng):
+    problem = sphere_problem(rng.random((6, 12)) + 0.2, 60, threads=1, epsilon=1e-13)
+    assert isinstance(problem.manifold, ScaledSphere)
+    objective, manifold = problem.objective, problem.manifold
+    points = problem.sample(rng, 60)
+    objective.set_points(points)
+    energy, gradient = objective.energy(), manifold.riesz(points, objective.gradient())
+    direction = manifold.project(points, rng.standard_normal(points.shape))
+
+    def remainder(t):
+        objective.set_points(manifold.retract(points, t * direction))
+        return objective.energy() - energy - t * manifold.inner(points, gradient, direction)
+
+    assert taylor_slope(remainder, np.logspace(-2.5, -4, 6)) == pytest.approx(2, abs=0.1)
+
+
+def test_stratified_start_gives_every_stretch_of_the_curve_its_share(rng):
+    """On a 16 x 32 map each half (16 x 16 cells) is one stretch of the Hilbert curve through the cells: its
+    points are its share of the mass to within one, and every point lies in a cell of positive density."""
+    values = rng.random((16, 32))
+    values[3:5] = 0.0
+    cells = CellMap(values)
+    points = cells.stratified(rng, 1001)
+    longitude, latitude = lon_lat(points)
+    column = np.floor(np.mod(longitude, 360) / 360 * 32).astype(int)
+    row = np.minimum(np.floor((90 - latitude) / 180 * 16).astype(int), 15)
+    assert np.all(values[row, column] > 0)
+    mass = values * cells.cell_areas
+    left = mass[:, :16].sum() / mass.sum()
+    assert abs(np.sum(column < 16) - 1001 * left) <= 1.0

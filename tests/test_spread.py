@@ -1,14 +1,18 @@
 """The spread step (``stipple.spread``) by its own properties: an exact lattice is left alone, a close pair is
 separated while dots away from it stay, every move is bounded, empty pixels keep their dots, and in a run it
-raises the low tail of the nearest-neighbour ratio."""
+raises the low tail of the nearest-neighbour ratio; the same on the sphere, where maps spread and designs do
+not."""
 
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from stipple.halftone import run
-from stipple.measures.evaluate import torus_neighbour_ratios
-from stipple.spread import SPREAD_PASSES, hexagonal_spacing_at, spread_close
+from stipple.design import fibonacci_lattice
+from stipple.halftone import hexagonal_spacing, run
+from stipple.manifolds import Sphere
+from stipple.measures.evaluate import sphere_clumps, torus_neighbour_ratios
+from stipple.sphere import BUILTINS, CellMap, local_density, sphere_problem
+from stipple.spread import SPREAD_PASSES, hexagonal_spacing_at, spread_close, spread_close_sphere
 from stipple.torus import torus_problem
 
 
@@ -103,3 +107,80 @@ def test_spread_in_a_run_raises_the_ratio_tail_at_nearly_the_same_energy(small_r
     plain_energy = problem.objective.energy()
     problem.objective.set_points(spread.points)
     assert problem.objective.energy() < 1.01 * plain_energy
+
+
+# The sphere: the same step along great circles (``spread_close_sphere``).
+
+
+def geodesic(a, b):
+    return 2 * np.arcsin(np.minimum(np.linalg.norm(a - b, axis=-1) / 2, 1.0))
+
+
+def uniform_local_density(count):
+    return np.full(count, count / (4 * np.pi))
+
+
+def test_sphere_a_fibonacci_lattice_above_the_target_is_left_exactly_alone():
+    points = fibonacci_lattice(2000)
+    ratios = sphere_clumps(points, BUILTINS["uniform"])["neighbour_distance_over_hexagonal"]
+    target = 0.95 * ratios["min"]
+    spread, moved = spread_close_sphere(points, uniform_local_density(len(points)), target=target)
+    assert moved == 0
+    assert np.array_equal(spread, points)
+
+
+def test_sphere_a_close_pair_is_separated_and_dots_away_from_it_stay():
+    lattice = fibonacci_lattice(2000)
+    spacing = hexagonal_spacing(len(lattice) / (4 * np.pi), 1.0)
+    # A dot a fifth of a spacing from lattice dot 700, along the meridian.
+    tangent = np.cross(lattice[700], [0.0, 0.0, 1.0])
+    tangent /= np.linalg.norm(tangent)
+    extra = np.cos(0.2 * spacing) * lattice[700] + np.sin(0.2 * spacing) * tangent
+    points = np.vstack([lattice, extra])
+    # Below every ratio of the lattice itself (its dots near the poles are less regular than 0.78).
+    target = 0.95 * sphere_clumps(lattice, BUILTINS["uniform"])["neighbour_distance_over_hexagonal"]["min"]
+    spread, moved = spread_close_sphere(points, uniform_local_density(len(points)), target=target)
+    assert moved >= 2
+    assert np.allclose(np.linalg.norm(spread, axis=1), 1.0, atol=1e-14)
+    before, after = geodesic(points[700], points[-1]), geodesic(spread[700], spread[-1])
+    assert after > before + 0.5 * (target * spacing - before)
+    nearest = [cKDTree(p).query(p, k=2)[0][:, 1].min() for p in (points, spread)]
+    assert nearest[1] > nearest[0]
+    far = geodesic(points, extra) > 3 * spacing
+    assert np.array_equal(spread[far], points[far])
+
+
+def test_sphere_moves_are_bounded_and_empty_cells_keep_their_dots(rng):
+    values = rng.random((30, 60)) + 0.2
+    values[:8] = 0.0
+    density = CellMap(values)
+    points = Sphere().random(rng, 3000)
+    local = local_density(density, points)
+    spread, moved = spread_close_sphere(points, local, target=0.85)
+    assert moved > 0
+    assert np.allclose(np.linalg.norm(spread, axis=1), 1.0, atol=1e-14)
+    shift = geodesic(spread, points)
+    empty = local == 0
+    spacing = hexagonal_spacing(local[~empty], 1.0)
+    assert empty.any() and np.all(shift[empty] == 0)
+    assert np.all(shift[~empty] <= SPREAD_PASSES * 0.85 * spacing / 2 + 1e-9)
+    tails = [sphere_clumps(p, density)["neighbour_distance_over_hexagonal"]["p05"] for p in (points, spread)]
+    assert tails[1] > tails[0] + 0.1
+
+
+def test_sphere_maps_spread_in_a_run_and_designs_do_not():
+    yy, xx = np.mgrid[0:40, 0:80] / 40
+    values = 0.2 + np.where(np.abs(yy - 0.5) < 0.15, 0.8, 0.3 * xx)
+    problem = sphere_problem(values, 3000, threads=2)
+    assert sphere_problem(BUILTINS["uniform"], 200, threads=2).spread is None
+    results = {flag: run(problem, seed=0, iterations=40, spread=flag) for flag in (False, True)}
+    plain, spread = results[False], results[True]
+    assert "close dots spread" in spread.message and spread.iterations == plain.iterations
+    density = CellMap(values)
+    tails = [sphere_clumps(r.points, density)["neighbour_distance_over_hexagonal"]["p01"] for r in (plain, spread)]
+    assert tails[1] > tails[0]
+    energies = []
+    for result in (plain, spread):
+        problem.objective.set_points(result.points)
+        energies.append(problem.objective.energy())
+    assert energies[1] < 1.01 * energies[0]

@@ -30,9 +30,10 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 )
 @click.option(
     "--init",
-    default="density",
+    default="stratified",
     show_default=True,
-    help="Start: 'density', 'uniform', or a CSV of lon,lat (degrees) or x,y,z.",
+    help="Start: 'stratified' (maps: coarse to fine from a start stratified over the map; otherwise as 'density'), "
+    "'density' (i.i.d.), 'uniform', or a CSV of lon,lat (degrees) or x,y,z.",
 )
 @click.option(
     "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="CSV columns."

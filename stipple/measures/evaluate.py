@@ -24,6 +24,7 @@ from scipy.spatial import cKDTree
 from ..design import fibonacci_lattice
 from ..halftone import hexagonal_spacing
 from ..sampling import pixel_indices, pixel_positions
+from ..sphere_density import density_at, local_density
 
 BLURS = (1.0, 2.0, 4.0)
 # E|psi_l(X)|^2 as it enters sums whose weights depend on the degree only: 1 on the torus (|psi| = 1); on the
@@ -218,34 +219,6 @@ def torus_clumps(points, weights):
     }
 
 
-def density_at(density, points):
-    """Value of a sphere density at unit vectors ``points``.
-
-    Parameters
-    ----------
-    density : CellMap or AnalyticDensity or UniformDensity
-        A map is constant on its cells (column ``j`` starts at ``lon0 + 360 j / W`` degrees east, row 0 at
-        the north pole); an analytic density is its function; anything else is read through ``cell_map()``.
-    points : numpy.ndarray
-        ``(M, 3)`` unit vectors.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(M,)`` density values.
-    """
-    if hasattr(density, "function"):
-        return np.asarray(density.function(points), dtype=np.float64)
-    if not hasattr(density, "values"):
-        return density_at(density.cell_map(), points)
-    rows, columns = density.values.shape
-    theta = np.arccos(np.clip(points[:, 2], -1, 1))
-    phi = np.mod(np.arctan2(points[:, 1], points[:, 0]) - np.radians(density.lon0), 2 * np.pi)
-    row = np.minimum((theta / np.pi * rows).astype(int), rows - 1)
-    column = np.minimum((phi / (2 * np.pi) * columns).astype(int), columns - 1)
-    return density.values[row, column]
-
-
 def sphere_clumps(points, density):
     """Geodesic nearest-neighbour distance over the hexagonal spacing of ``rho = M w / int w`` (per sr).
 
@@ -255,7 +228,7 @@ def sphere_clumps(points, density):
     chords, _ = cKDTree(points).query(points, k=2)
     distance = 2 * np.arcsin(np.minimum(chords[:, 1] / 2, 1.0))
     local = density_at(density, points)
-    spacing = local_spacing(len(points) * local / (4 * np.pi * density.mean))
+    spacing = local_spacing(local_density(density, points))
     cells = density if hasattr(density, "values") else density.cell_map()
     judged = local > light_threshold(cells.values, cells.cell_areas)
     return {

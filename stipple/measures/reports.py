@@ -24,6 +24,8 @@ GRAY_CHROMA = 2.0
 # The torus problems that measure points: transforms to 1e-10 at the full default bandwidth; measuring needs no
 # metric, so the density-scaled one's stiffness field is not made.
 MEASURE_OPTIONS = {"epsilon": 1e-10, "bandwidth_factor": 1.0, "precondition": False}
+# ... and the sphere's: transforms to 1e-12 at the full default degree, the plain metric.
+SPHERE_MEASURE_OPTIONS = {"epsilon": 1e-12, "bandwidth_factor": 1.0, "precondition": False}
 
 
 def evaluation_report(
@@ -72,7 +74,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
         value_range=options["value_range"],
         lon0=options["lon0"],
     )
-    problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, epsilon=1e-12)
+    problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, **SPHERE_MEASURE_OPTIONS)
     return evaluate_sphere(problem, points, density)
 
 
