@@ -126,32 +126,42 @@ class Sphere:
     dimension = 3
 
     def inner(self, points, u, v):
-        return float(np.sum(u * v))
+        return float(np.einsum("ij,ij->", u, v))
 
     def norm(self, points, v):
         return np.sqrt(self.inner(points, v, v))
 
     def project(self, points, v):
         """Tangential part ``v - (x . v) x`` at every point."""
-        return v - np.sum(points * v, axis=1, keepdims=True) * points
+        return v - np.einsum("ij,ij->i", points, v)[:, None] * points
 
     def riesz(self, points, covector):
         return self.project(points, covector)
 
     def retract(self, points, v):
         """Exponential map ``cos|v| x + sin|v| v/|v|``, re-normalised against drift."""
-        length = np.linalg.norm(v, axis=1, keepdims=True)
-        moved = np.cos(length) * points + np.sinc(length / np.pi) * v
-        return moved / np.linalg.norm(moved, axis=1, keepdims=True)
+        return self._geodesics(points, v)[3]
 
     def transport(self, points, v, w):
-        """Parallel transport of ``w`` along the geodesic ``t -> exp_x(t v)`` to ``t = 1``."""
-        length = np.linalg.norm(v, axis=1, keepdims=True)
-        safe = np.where(length > 0, length, 1.0)
-        direction = np.where(length > 0, v / safe, 0.0)
-        along = np.sum(w * direction, axis=1, keepdims=True)
-        moved = along * (np.cos(length) * direction - np.sin(length) * points) + w - along * direction
-        return self.project(self.retract(points, v), moved)
+        """Parallel transport of ``w`` along the geodesic ``t -> exp_x(t v)`` to ``t = 1``: its component along
+        the unit direction ``u`` of ``v`` turns into ``cos|v| u - sin|v| x``, the rest stays."""
+        cosine, sine, direction, end = self._geodesics(points, v)
+        along = np.einsum("ij,ij->i", w, direction)[:, None]
+        return self.project(end, w + along * ((cosine - 1) * direction - sine * points))
+
+    def _geodesics(self, points, v):
+        """``(cos|v|, sin|v|, v / |v|, exp_x(v))`` per point, kept for the last ``(points, v)`` pair: CG retracts
+        along its step and then transports two vectors along the same step."""
+        last = getattr(self, "_last", None)
+        if last is not None and last[0] is points and last[1] is v:
+            return last[2]
+        length = np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
+        cosine, sine = np.cos(length), np.sin(length)
+        moved = cosine * points + np.sinc(length / np.pi) * v
+        end = moved / np.sqrt(np.einsum("ij,ij->i", moved, moved))[:, None]
+        direction = np.where(length > 0, v / np.where(length > 0, length, 1.0), 0.0)
+        self._last = (points, v, (cosine, sine, direction, end))
+        return self._last[2]
 
     def canonical(self, points):
         """Points scaled onto the unit sphere."""
