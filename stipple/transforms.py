@@ -159,7 +159,8 @@ class ResidueSplitNufft:
         def one_class(residue):
             offset, _, nufft = self._classes[residue]
             nufft.set_points(folded)
-            return np.exp(-2j * np.pi * offset * points[:, 0])
+            # The class of offset 0 (one of them for any thread count) needs no phase.
+            return None if offset == 0 else np.exp(-2j * np.pi * offset * points[:, 0])
 
         self._phases = list(thread_pool(self.threads).map(one_class, range(self.threads)))
         self.counts["set_points"] += 1
@@ -171,7 +172,8 @@ class ResidueSplitNufft:
         def one_class(residue):
             # One task per class: a plan is never used by two threads at once (ducc0's plans are not thread-safe).
             _, first_row, nufft = self._classes[residue]
-            out[:, first_row :: self.threads] = nufft.type1(values * self._phases[residue])
+            phase = self._phases[residue]
+            out[:, first_row :: self.threads] = nufft.type1(values if phase is None else values * phase)
 
         list(thread_pool(self.threads).map(one_class, range(self.threads)))
         return out
