@@ -7,6 +7,7 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import (
+    DEFAULT_SETTLE,
     MAX_BANDWIDTH,
     Problem,
     check_count,
@@ -49,8 +50,11 @@ MODES_PER_SPACING = 8.52
 # highest frequency rho_max = N / (2 pi) of degree N).
 NEAR_FIELD_REACH = 3 * np.pi
 NEAR_FIELD_SPACINGS = 5.0
-# Maps stop when 20 iterations gain less than this fraction of the energy (``stipple.halftone.run``'s settle).
-MAP_SETTLE = 3e-3
+# Maps stop when 20 iterations gain less than this fraction of the energy (``stipple.halftone.run``'s settle), as
+# images on the torus do. At 3e-3 the topography (M = 200000) kept the old quality in 0.46x the time, but held-out
+# maps (a 2:1 photo, the three Gaussians; M = 50000) ended 1.15-1.32 % above the old run's energy; at 2e-3 they
+# end 0.92-1.02 % above it in 0.36x and 0.56x (docs/performance.md).
+MAP_SETTLE = DEFAULT_SETTLE
 
 
 def default_bandwidth(n_points, density=None):
