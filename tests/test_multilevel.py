@@ -240,9 +240,17 @@ def test_sphere_split_of_a_spread_set_on_a_constant_map_gives_four_children_arou
     assert np.median(nearest) == pytest.approx(hexagonal_spacing(2000, 4 * np.pi), rel=0.2)
 
 
-def test_sphere_maps_start_coarse_to_fine_and_end_no_higher_than_the_stratified_start():
-    values = np.tile(0.2 + 0.8 * np.sin(np.linspace(0, np.pi, 60))[:, None] ** 2, (1, 120))
-    problem = sphere_problem(values, 2400, threads=2)
+def sphere_maps():
+    theta, phi = np.meshgrid(np.linspace(0, np.pi, 60), np.linspace(0, 2 * np.pi, 120), indexing="ij")
+    band = 0.2 + 0.8 * np.sin(theta) ** 2
+    bump = 0.05 + np.exp(-((theta - 1.0) ** 2 + (phi - 2.0) ** 2) / 0.2)
+    halves = np.where(phi < np.pi, 1.0, 0.15)
+    return [band, bump, halves]
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_sphere_maps_start_coarse_to_fine_and_end_no_higher_than_the_stratified_start(index):
+    problem = sphere_problem(sphere_maps()[index], 2400, threads=2)
     assert problem.level(600).n_points == 600 and problem.level(600).bandwidth < problem.bandwidth
     start = coarse_to_fine(problem, np.random.default_rng(0), smallest=150)
     stratified = problem.stratified(np.random.default_rng(0), 2400)
@@ -253,6 +261,9 @@ def test_sphere_maps_start_coarse_to_fine_and_end_no_higher_than_the_stratified_
     assert energies[0] < 0.7 * energies[1]
     ends = [run(problem, init=points, iterations=20, settle=0, spread=False).energy for points in (start, stratified)]
     assert ends[0] <= ends[1]
-    # Designs have no levels: "stratified" is their i.i.d. start, as before.
+
+
+def test_sphere_designs_have_no_levels():
+    """A design's "stratified" start is its i.i.d. start, as before."""
     design = sphere_problem(None, 9000, threads=2)
-    assert design.level is None and design.stratified is None
+    assert design.level is None and design.stratified is None and design.split is None
