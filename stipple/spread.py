@@ -10,13 +10,15 @@ the tone edges settles.
 
 ``spread_close`` moves every dot whose ratio is below a target (the ratios' ``SPREAD_PERCENTILE``-th percentile,
 at least ``SPREAD_TARGET``) away from its nearest neighbour by half the shortfall, a few passes; a few CG
-iterations then smooth the disturbance (``stipple.halftone.run``).
+iterations then smooth the disturbance (``stipple.halftone.run``). ``spread_close_sphere`` is the same step on
+the sphere (geodesic distances, moves along great circles), for maps (``stipple.sphere``).
 """
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .halftone import hexagonal_spacing
+from .manifolds import Sphere
 from .sampling import pixel_indices, pixel_positions
 
 # A dot is spread when its nearest-neighbour distance is below this percentile of all dots' ratios to the
@@ -83,11 +85,9 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
 
     def step_away(vectors, close, neighbour, distance, length):
         origin = vectors[close]
-        away = origin - vectors[neighbour]
-        away -= np.einsum("ij,ij->i", away, origin)[:, None] * origin
+        away = Sphere().project(origin, origin - vectors[neighbour])
         away /= np.maximum(np.linalg.norm(away, axis=1), 1e-300)[:, None]
-        moved = np.cos(length)[:, None] * origin + np.sin(length)[:, None] * away
-        return moved / np.linalg.norm(moved, axis=1)[:, None]
+        return Sphere().retract(origin, length[:, None] * away)
 
     return spread_apart(np.array(points, dtype=float), spacing, nearest, step_away, target, passes)
 
