@@ -204,7 +204,7 @@ def progressive_inks(layers, problem, *, levels=LEVELS, **options):
             "ink_level_points": [ink.settings["level_points"] for ink in inks],
         },
     )
-    return nested, [np.diff([0] + [level.stop for level in ink.slices]) for ink in inks]
+    return nested, [np.asarray(pass_counts(ink.n_points, len(ink.slices))) for ink in inks]
 
 
 def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=1.0, **options):
@@ -224,7 +224,7 @@ def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_wei
     layers = separate(rgb, separation, black)
     if len(layers) == 1:
         problem = progressive_problem(layers[0].density, n_points, **settings)
-        return layers, run(problem, **options), [np.diff([0] + [part.stop for part in problem.slices])]
+        return layers, run(problem, **options), [np.asarray(pass_counts(n_points, len(problem.slices)))]
     levels = settings.pop("levels", LEVELS)
     layers, joint = colour_problem(
         rgb, n_points, separation=separation, black=black, union_weight=union_weight, **settings

@@ -16,6 +16,7 @@ import vpype_cli
 from .colour import halftone_colour, parse_palette
 from .errors import StippleError
 from .line import LINE_ITERATIONS
+from .multiclass import class_slices
 from .pipelines.colour import ink_layers
 from .progressive import order_dots, progressive_colour
 from .render.dots import flat_dots
@@ -37,11 +38,8 @@ def pen_layers(
     palette = parse_palette(separation)
     if order == "progressive":
         layers, result, counts = progressive_colour(image, n_points, separation=palette, **options)
-        ends = np.cumsum([sum(passes) for passes in counts])
-        inks = [
-            (layer.name, layer.colour, result.points[end - sum(passes) : end])
-            for layer, passes, end in zip(layers, counts, ends, strict=True)
-        ]
+        parts = class_slices([sum(passes) for passes in counts])
+        inks = [(layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, parts, strict=True)]
         ink = sum(layer.density for layer in layers).mean()
     else:
         layers, problem, result = halftone_colour(image, n_points, separation=palette, **options)
