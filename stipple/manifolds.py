@@ -125,6 +125,10 @@ class Sphere:
 
     dimension = 3
 
+    def __init__(self):
+        # The last ``(points, step, geodesics)`` of ``_geodesics``.
+        self._last = None
+
     def inner(self, points, u, v):
         return float(np.einsum("ij,ij->", u, v))
 
@@ -152,9 +156,8 @@ class Sphere:
     def _geodesics(self, points, v):
         """``(cos|v|, sin|v|, v / |v|, exp_x(v))`` per point, kept for the last ``(points, v)`` pair: CG retracts
         along its step and then transports two vectors along the same step."""
-        last = getattr(self, "_last", None)
-        if last is not None and last[0] is points and last[1] is v:
-            return last[2]
+        if self._last is not None and self._last[0] is points and self._last[1] is v:
+            return self._last[2]
         length = np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
         cosine, sine = np.cos(length), np.sin(length)
         moved = cosine * points + np.sinc(length / np.pi) * v
@@ -183,6 +186,7 @@ class ScaledSphere(Sphere):
     """
 
     def __init__(self, factor_at):
+        super().__init__()
         self.factor = PointFactors(factor_at)
 
     def inner(self, points, u, v):

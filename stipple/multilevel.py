@@ -157,8 +157,7 @@ def sphere_cell_masses(cells, points, samples_per_cell=SAMPLES_PER_CELL, threads
     the spherical Voronoi cell of each of ``points`` (unit vectors), as fractions; every map cell is cut into
     ``f x f`` sub-cells, each of whose mass goes to the dot nearest to its centre."""
     factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / cells.values.size))))
-    fine = type(cells)(np.repeat(np.repeat(cells.values, factor, axis=0), factor, axis=1), cells.lon0)
-    centres, sub_masses = fine.centres_and_masses()
+    centres, sub_masses = cells.refined(factor).centres_and_masses()
     inked = sub_masses > 0
     _, owner = cKDTree(points).query(centres[inked], workers=threads)
     masses = np.bincount(owner, weights=sub_masses[inked], minlength=len(points))

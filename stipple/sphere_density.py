@@ -68,6 +68,10 @@ class CellMap:
         column = np.floor(np.mod(np.asarray(longitude) - self.lon0, 360.0) / 360.0 * columns).astype(int)
         return self.values[row, np.minimum(column, columns - 1)]
 
+    def refined(self, factor):
+        """The same map with every cell cut into ``factor x factor`` cells (equal in colatitude and longitude)."""
+        return CellMap(np.repeat(np.repeat(self.values, factor, axis=0), factor, axis=1), self.lon0)
+
     def centres_and_masses(self):
         """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
         rows, columns = self.values.shape

@@ -83,11 +83,13 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
         chord, neighbour = cKDTree(vectors).query(vectors, k=2)
         return 2 * np.arcsin(np.minimum(chord[:, 1] / 2, 1.0)), neighbour[:, 1]
 
+    sphere = Sphere()
+
     def step_away(vectors, close, neighbour, distance, length):
         origin = vectors[close]
-        away = Sphere().project(origin, origin - vectors[neighbour])
+        away = sphere.project(origin, origin - vectors[neighbour])
         away /= np.maximum(np.linalg.norm(away, axis=1), 1e-300)[:, None]
-        return Sphere().retract(origin, length[:, None] * away)
+        return sphere.retract(origin, length[:, None] * away)
 
     return spread_apart(np.array(points, dtype=float), spacing, nearest, step_away, target, passes)
 
