@@ -312,11 +312,11 @@ def halftone_torus(
         Number of dots M, 1 <= M <= 20,000,000.
     bandwidth : int, optional
         Even bandwidth N of the kernel along the longer image side (default ``default_bandwidth(M)``).
-    backend : {"ducc0", "finufft"}
-        NUFFT library.
+    backend : {"ducc0", "finufft", "cufinufft"}
+        NUFFT library; "cufinufft" runs the transforms on an NVIDIA GPU (``stipple.gpu``).
     threads : int, optional
-        Threads for the transforms (default: all CPUs). The same thread count gives the same points
-        bit for bit (see ``stipple.transforms.ResidueSplitNufft``).
+        Threads for the transforms (default: all CPUs). On the CPU the same thread count gives the same points
+        bit for bit (see ``stipple.transforms.ResidueSplitNufft``); on the GPU they agree to rounding.
     epsilon : float
         Requested accuracy of the transforms.
     hessian : {"gauss-newton", "full"}

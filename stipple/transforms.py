@@ -19,19 +19,10 @@ import functools
 import numpy as np
 
 from .parallel import map_blocks, sum_blocks, thread_pool
+from .precision import SINGLE_PRECISION_EPSILON, precision  # noqa: F401 (both are part of this module's interface)
 
-BACKENDS = ("ducc0", "finufft")
-
-# Transforms asked for this accuracy or a coarser one run in single precision (float32 points, complex64 values):
-# both libraries reach it there, and their spreading and FFTs take about half the memory traffic.
-SINGLE_PRECISION_EPSILON = 1e-5
-
-
-def precision(epsilon):
-    """``(real dtype, complex dtype)`` of the transforms for ``epsilon``."""
-    if epsilon >= SINGLE_PRECISION_EPSILON:
-        return np.float32, np.complex64
-    return np.float64, np.complex128
+# "cufinufft" runs on an NVIDIA GPU (``stipple.gpu``, the ``gpu`` extra).
+BACKENDS = ("ducc0", "finufft", "cufinufft")
 
 
 class Ducc0Nufft:
@@ -191,8 +182,13 @@ MIN_ROWS_PER_THREAD = 32
 
 
 def make_nufft(backend, shape, epsilon, threads):
-    """The NUFFT backend called ``backend`` (one of ``BACKENDS``), bit-reproducible for a given ``threads``."""
+    """The NUFFT backend called ``backend`` (one of ``BACKENDS``), bit-reproducible for a given ``threads`` on the CPU
+    (the GPU's agree to rounding)."""
     classes = {"ducc0": Ducc0Nufft, "finufft": FinufftNufft}
+    if backend == "cufinufft":
+        from .gpu import CufinufftNufft
+
+        return CufinufftNufft(shape, epsilon, threads)
     if backend not in classes:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
     if threads > 1 and shape[0] >= MIN_ROWS_PER_THREAD * threads:

@@ -40,3 +40,23 @@ def hessian_taylor_slope(objective, points, direction, steps):
     slope = taylor_slope(remainder, steps)
     objective.set_points(points)
     return slope, hess_direction
+
+
+def _gpu_available():
+    from stipple.errors import StippleError
+    from stipple.gpu import require_gpu
+
+    try:
+        require_gpu()
+    except StippleError:
+        return False
+    return True
+
+
+# The GPU backend's tests run where the ``gpu`` extra and a device are there (a lent GPU machine), else skip.
+needs_gpu = pytest.mark.skipif(not _gpu_available(), reason="needs cufinufft, CuPy and an NVIDIA GPU")
+
+
+def backend_params(backends):
+    """``backends`` for ``pytest.mark.parametrize``, the GPU's marked ``needs_gpu``."""
+    return [pytest.param(name, marks=needs_gpu) if name == "cufinufft" else name for name in backends]

@@ -5,8 +5,8 @@ import time
 import click
 
 from ..errors import StippleError
-from .defaults import BACKENDS, INITS
-from .options import common_options, palette_options, resolve_input, without
+from .defaults import INITS
+from .options import backend_option, common_options, palette_options, resolve_input, without
 from .recipes import colour_recipe, run_pipeline
 
 
@@ -17,7 +17,7 @@ from .recipes import colour_recipe, run_pipeline
 @common_options
 @palette_options("cmyk")
 @click.option("--init", type=click.Choice(INITS), default="density", show_default=True)
-@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@backend_option()
 @click.option("--hessian", type=click.Choice(["gauss-newton", "full"]), default="gauss-newton", show_default=True)
 @click.pass_context
 def colour(ctx, image, **options):

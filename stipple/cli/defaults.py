@@ -9,7 +9,7 @@ SETTLE_WINDOW = 20
 INITS = ("stratified", "density", "uniform")
 DEFAULT_SETTLE = 2e-3
 # stipple.transforms
-BACKENDS = ("ducc0", "finufft")
+BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video
 FRAME_ITERATIONS = 20
 # stipple.line

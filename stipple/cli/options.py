@@ -7,7 +7,7 @@ import click
 from ..errors import StippleError
 from ..render.styles import DOT_STYLES, STYLES
 from .config import load_config
-from .defaults import BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
+from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
 
 
 def resolve_input(ctx, given):
@@ -23,6 +23,17 @@ def config_option():
         is_eager=True,
         expose_value=False,
         help="TOML file of option values (command-line options win).",
+    )
+
+
+def backend_option():
+    """The transforms' library, shared by the commands on the torus."""
+    return click.option(
+        "--backend",
+        type=click.Choice(BACKENDS),
+        default="ducc0",
+        show_default=True,
+        help="NUFFT library (cufinufft: an NVIDIA GPU, pip install 'stipple[gpu]').",
     )
 
 

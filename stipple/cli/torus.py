@@ -5,8 +5,7 @@ import time
 import click
 
 from ..errors import StippleError
-from .defaults import BACKENDS
-from .options import common_options, init_input, palette_options, resolve_input
+from .options import backend_option, common_options, init_input, palette_options, resolve_input
 from .recipes import colour_recipe, run_pipeline, torus_recipe
 
 
@@ -20,7 +19,7 @@ from .recipes import colour_recipe, run_pipeline, torus_recipe
     help="Start: 'stratified' (the image's dots shared out along a Hilbert curve), 'density' (i.i.d. from the "
     "image), 'uniform', or a CSV of x,y pixel positions.",
 )
-@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@backend_option()
 @click.option(
     "--hessian",
     type=click.Choice(["gauss-newton", "full"]),

@@ -7,8 +7,9 @@ import click
 
 from ..errors import StippleError
 from . import supervise
-from .defaults import BACKENDS, FRAME_ITERATIONS
+from .defaults import FRAME_ITERATIONS
 from .options import (
+    backend_option,
     common_options,
     init_input,
     palette_options,
@@ -28,7 +29,7 @@ DEFAULT_FPS = 24.0
 @click.argument("source", required=False)
 @common_options
 @click.option("--init", default="stratified", show_default=True, help="Frame 0's start (as for 'stipple torus').")
-@click.option("--backend", type=click.Choice(BACKENDS), default="ducc0", show_default=True, help="NUFFT library.")
+@backend_option()
 @click.option(
     "--hessian",
     type=click.Choice(["gauss-newton", "full"]),

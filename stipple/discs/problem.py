@@ -144,7 +144,7 @@ def disc_problem(
         Number of discs M, 1 <= M <= 20,000,000.
     bandwidth : int, optional
         Even bandwidth N along the longer side (default ``stipple.torus.default_bandwidth(M, weights)``).
-    backend : {"ducc0", "finufft"}
+    backend : {"ducc0", "finufft", "cufinufft"}
     threads : int, optional
         Threads of the transforms (default: all CPUs).
     epsilon : float
