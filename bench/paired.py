@@ -11,6 +11,8 @@ round's outputs of both are judged by the new version's ``stipple evaluate`` (th
 untruncated energy, exact-blur PSNR at sigma 1, 2, 4 px, the nearest-neighbour ratio's 1st percentile, and the
 drawn picture's luminance RMSE (colour: CIEDE2000) at sigma 4 px. ``--old`` defaults to ``$STIPPLE_OLD``; without
 either, only the new command runs (a fresh clone has no old version). Medians and new/old ratios are in the JSON.
+``--variant LABEL=OPTIONS`` (repeatable) adds the new command with more options after the case's own, e.g.
+``gpu=--backend cufinufft``, in the same alternation, with its own ratio to the old.
 """
 
 import argparse
@@ -174,7 +176,8 @@ def run_case(name, spec, versions, repeats, out, timeout):
             paths = {fmt: folder / f"out.{fmt}" for fmt in formats}
             for path in paths.values():
                 path.unlink(missing_ok=True)
-            command = [*versions[label], *arguments, *sum((["-o", str(p)] for p in paths.values()), [])]
+            prefix, suffix = versions[label]
+            command = [*prefix, *arguments, *suffix, *sum((["-o", str(p)] for p in paths.values()), [])]
             record = run_measured(command, timeout)
             record["iterations"] = iterations_from(record["stderr"])
             record["stderr"] = record["stderr"][-400:]
@@ -190,20 +193,23 @@ def run_case(name, spec, versions, repeats, out, timeout):
     for label in versions:
         seconds = [item["seconds"] for item in runs[label]]
         entry["versions"][label] = {
-            "command": shlex.join(versions[label]),
+            "command": shlex.join(versions[label][0] + versions[label][1]),
             "seconds": seconds,
             "median_seconds": statistics.median(seconds),
             "peak_gib": max(item["peak_bytes"] for item in runs[label]) / 2**30,
             "iterations": [item["iterations"] for item in runs[label]],
             "returncodes": [item["returncode"] for item in runs[label]],
-            "quality": summary(evaluate(versions["new"], outputs[label], source, evaluate_options)),
+            "quality": summary(evaluate(versions["new"][0], outputs[label], source, evaluate_options)),
         }
     if "old" in versions:
-        old, new = entry["versions"]["old"], entry["versions"]["new"]
-        entry["ratio_new_over_old"] = new["median_seconds"] / old["median_seconds"]
-        entry["ratios_per_round"] = [
-            n / o for n, o in zip(runs["new"], runs["old"], strict=True) for n, o in [(n["seconds"], o["seconds"])]
-        ]
+        old = entry["versions"]["old"]
+        for label in versions:
+            if label == "old":
+                continue
+            key = "" if label == "new" else f"_{label}"
+            entry[f"ratio{key}_new_over_old"] = entry["versions"][label]["median_seconds"] / old["median_seconds"]
+            pairs = zip(runs[label], runs["old"], strict=True)
+            entry[f"ratios{key}_per_round"] = [new["seconds"] / old_run["seconds"] for new, old_run in pairs]
     return entry
 
 
@@ -216,12 +222,16 @@ def main(argv=None):
     parser.add_argument("--timeout", type=float, default=1800)
     parser.add_argument("--out", default="out/paired")
     parser.add_argument("--output", default="bench/paired.json")
+    parser.add_argument("--variant", action="append", default=[], help="LABEL=OPTIONS: the new command with OPTIONS")
     args = parser.parse_args(argv)
     out = Path(args.out)
     specs = cases(make_inputs(out / "inputs"))
-    versions = {"new": shlex.split(args.new)}
+    versions = {"new": (shlex.split(args.new), [])}
+    for variant in args.variant:
+        label, _, options = variant.partition("=")
+        versions[label] = (shlex.split(args.new), shlex.split(options))
     if args.old:
-        versions = {"old": shlex.split(args.old), **versions}
+        versions = {"old": (shlex.split(args.old), []), **versions}
     results = {}
     for name in args.cases.split(","):
         results[name] = run_case(name, specs[name], versions, args.repeats, out, args.timeout)

@@ -22,7 +22,7 @@ import resource
 import subprocess
 import sys
 import time
-from importlib.metadata import version
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +44,7 @@ PEAKED_CASES = [(10000, None)]  # M, N (None: the default chosen from the densit
 SCALE_CASES = [("torus", "1000000", "1024", "5"), ("design", "200", "default"), ("design", "1000", "1002000")]
 QUICK_SCALE_CASES = [("torus", "20000", "256", "3"), ("design", "20", "default")]
 VIDEO_CASES, QUICK_VIDEO_CASES = (2000, 20000), (500,)
+SECTIONS = ("torus", "sphere", "peaked", "scale", "video")
 
 
 def gaussian_bump(points, centre=(30.0, 20.0), sigma_degrees=8.0, floor=0.04):
@@ -64,7 +65,8 @@ def median_iteration_seconds(problem, iterations):
         counts.append(dict(transform_counts(problem)))
         return False
 
-    run(problem, tol=1e-15, iterations=2 * iterations, settle=0, correct=False, callback=record)
+    # Without the coarse-to-fine start, whose levels' iterations (fewer dots, lower N) the callback would also see.
+    run(problem, tol=1e-15, iterations=2 * iterations, settle=0, correct=False, levels=False, callback=record)
     per_iteration = {key: counts[-1][key] - counts[-2][key] for key in counts[-1]}
     gaps = np.diff(stamps)
     return float(np.median(gaps[1:iterations])), float(np.median(gaps[iterations:])), per_iteration
@@ -155,8 +157,13 @@ def scale_case(arguments):
 
 
 def versions():
-    names = ["numpy", "scipy", "ducc0", "finufft", "stipple"]
-    return {"python": platform.python_version(), **{name: version(name) for name in names}}
+    found = {"python": platform.python_version()}
+    for name in ("numpy", "scipy", "ducc0", "finufft", "cufinufft", "cupy", "stipple"):
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:  # an optional one, or stipple run from its source tree
+            found[name] = None
+    return found
 
 
 def main(argv=None):
@@ -165,6 +172,8 @@ def main(argv=None):
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--threads", type=int, default=default_threads())
     parser.add_argument("--quick", action="store_true", help="small cases only (smoke test)")
+    parser.add_argument("--backends", default="ducc0,finufft", help="torus backends (cufinufft: the GPU's)")
+    parser.add_argument("--sections", default=",".join(SECTIONS), help="which of " + ", ".join(SECTIONS))
     parser.add_argument(
         "--old", default=os.environ.get("STIPPLE_OLD"), help="another version's stipple command: paired cases"
     )
@@ -180,23 +189,26 @@ def main(argv=None):
         results.append(entry)
         print(json.dumps(entry), file=sys.stderr)
 
-    for n_points, bandwidth in [(2000, 128)] if args.quick else TORUS_CASES:
-        for backend, near_field in (("ducc0", True), ("ducc0", False), ("finufft", True)):
+    sections = args.sections.split(",")
+    backends = args.backends.split(",")
+    torus_variants = [(backends[0], True), (backends[0], False)] + [(backend, True) for backend in backends[1:]]
+    for n_points, bandwidth in [(2000, 128)] if args.quick else TORUS_CASES * ("torus" in sections):
+        for backend, near_field in torus_variants:
             problem = torus_problem(
                 portrait, n_points, bandwidth, backend=backend, threads=args.threads, near_field=near_field
             )
             record(case(problem, raw_torus_seconds, "samples/astronaut256.png", backend, args.threads, args.iterations))
-    for n_points, bandwidth in [(2000, 64)] if args.quick else SPHERE_CASES:
+    for n_points, bandwidth in [(2000, 64)] if args.quick else SPHERE_CASES * ("sphere" in sections):
         for near_field in (True, False):
             problem = sphere_problem(topography, n_points, bandwidth, threads=args.threads, near_field=near_field)
             record(case(problem, raw_sphere_seconds, "samples/topo.npy", "ducc0.sht", args.threads, args.iterations))
-    for n_points, bandwidth in [(2000, None)] if args.quick else PEAKED_CASES:
+    for n_points, bandwidth in [(2000, None)] if args.quick else PEAKED_CASES * ("peaked" in sections):
         for near_field in (True, False):
             problem = sphere_problem(gaussian_bump, n_points, bandwidth, threads=args.threads, near_field=near_field)
             record(case(problem, raw_sphere_seconds, "gaussian bump", "ducc0.sht", args.threads, args.iterations))
-    for arguments in QUICK_SCALE_CASES if args.quick else SCALE_CASES:
+    for arguments in QUICK_SCALE_CASES if args.quick else SCALE_CASES * ("scale" in sections):
         record(scale_case(arguments))
-    for count in QUICK_VIDEO_CASES if args.quick else VIDEO_CASES:
+    for count in QUICK_VIDEO_CASES if args.quick else VIDEO_CASES * ("video" in sections):
         for name, clip in clips(count, 6 if args.quick else 24, real=False):
             record({"video": True, **video_case(clip, count, args.threads, name)})
     report = {"machine": platform.machine(), "cpus": default_threads(), "versions": versions(), "cases": results}

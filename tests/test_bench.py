@@ -67,8 +67,8 @@ def test_quality_inputs_have_the_documented_properties(tmp_path):
 
 
 def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
-    """Two versions (here the same command twice) alternated: wall time, peak memory, iterations and the same
-    measures for both; identical commands give identical points and so identical quality."""
+    """Two versions (here the same command twice) and a variant of the new one (its default seed given) alternated:
+    wall time, peak memory, iterations and the same measures for all; identical runs give identical quality."""
     sys.path.insert(0, str(ROOT / "bench"))
     try:
         import paired
@@ -78,15 +78,17 @@ def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
     output = tmp_path / "paired.json"
     results = paired.main(
         ["--old", command, "--cases", "smoke", "--repeats", "2", "--out", str(tmp_path), "--output", str(output)]
+        + ["--variant", "seeded=--seed 0"]
     )
     assert json.loads(output.read_text()) == results
     entry = results["smoke"]
-    old, new = entry["versions"]["old"], entry["versions"]["new"]
-    for version in (old, new):
+    old, new, seeded = (entry["versions"][label] for label in ("old", "new", "seeded"))
+    assert seeded["command"].endswith("--seed 0")
+    for version in (old, new, seeded):
         assert len(version["seconds"]) == 2 and version["median_seconds"] > 0 and version["peak_gib"] > 0
         assert version["returncodes"] == [0, 0] and all(count > 0 for count in version["iterations"])
         quality = version["quality"]
         assert len(quality["psnr_exact"]) == 3 and 0 < quality["p01"] < 1.2 and quality["untruncated_energy"] > 0
         assert 0 <= quality["picture_sigma4_rmse"] < 0.1
-    assert old["quality"] == new["quality"] and entry["ratio_new_over_old"] > 0
-    assert len(entry["ratios_per_round"]) == 2
+    assert old["quality"] == new["quality"] == seeded["quality"] and entry["ratio_new_over_old"] > 0
+    assert len(entry["ratios_per_round"]) == len(entry["ratios_seeded_per_round"]) == 2
