@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-from conftest import gradient_taylor_slope, hessian_taylor_slope
+from conftest import backend_params, gradient_taylor_slope, hessian_taylor_slope
 
 from stipple.manifolds import Torus
 from stipple.torus import torus_problem
+from stipple.transforms import BACKENDS
 
 STEPS = np.logspace(-2.5, -4, 6)
 
@@ -18,7 +19,7 @@ def small_problem(rng, shape=(12, 20), hessian="gauss-newton", backend="ducc0"):
     return problem, problem.sample(rng, 30)
 
 
-@pytest.mark.parametrize("backend", ["ducc0", "finufft"])
+@pytest.mark.parametrize("backend", backend_params(BACKENDS))
 def test_gradient_taylor_slope_two(rng, backend):
     problem, points = small_problem(rng, backend=backend)
     objective = problem.objective

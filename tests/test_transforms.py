@@ -120,14 +120,17 @@ def test_residue_split_type2_uses_the_points_given_to_set_points(rng):
     np.testing.assert_allclose(nufft.type2(np.ones((1,) + shape, dtype=np.complex128)), expected, atol=1e-9)
 
 
-@pytest.mark.parametrize("backend_class", [Ducc0Nufft, FinufftNufft])
+@pytest.mark.parametrize("backend", backend_params(BACKENDS))
 @pytest.mark.parametrize("threads", [1, 2])
-def test_single_precision_transforms_against_direct_sums(backend_class, threads, rng):
+def test_single_precision_transforms_against_direct_sums(monkeypatch, backend, threads, rng):
     """At an epsilon of 1e-4 the transforms run in single precision and still match direct sums to that accuracy
-    (relative to the sums of magnitudes, the libraries' bound); results come back in double precision."""
+    (relative to the sums of magnitudes, the libraries' bound), also for points outside [0, 1) and on the CPU's
+    residue split (2 threads); results come back in double precision."""
+    monkeypatch.setattr(stipple.transforms, "MIN_ROWS_PER_THREAD", 1)
     shape = (21, 13)
-    points = rng.random((200, 2))
-    nufft = ResidueSplitNufft(backend_class, shape, 1e-4, threads) if threads > 1 else backend_class(shape, 1e-4, 1)
+    points = rng.random((200, 2)) * 3 - 1
+    nufft = make_nufft(backend, shape, 1e-4, threads)
+    assert isinstance(nufft, ResidueSplitNufft) == (threads > 1 and backend != "cufinufft")
     nufft.set_points(points)
     matrix = direct_matrix(points, shape)
     values = rng.standard_normal((2, 200)) + 1j * rng.standard_normal((2, 200))
