@@ -55,10 +55,13 @@ class Ducc0Nufft:
 
     def type1(self, values):
         """``out[b, n] = sum_i values[b, i] exp(-2 pi i n . p_i)`` for a batch ``(B, M)``."""
+        return self.type1_native(values).astype(np.complex128, copy=False)
+
+    def type1_native(self, values):
+        """``type1`` in the transform's own precision (complex64 in single precision)."""
         self.counts["type1"] += len(values)
         out = np.empty((len(values),) + self.shape, dtype=self._complex)
-        out = self._plan.nu2u(forward=True, points=np.ascontiguousarray(values, dtype=self._complex), out=out)
-        return out.astype(np.complex128, copy=False)
+        return self._plan.nu2u(forward=True, points=np.ascontiguousarray(values, dtype=self._complex), out=out)
 
     def type2(self, coeffs):
         """``out[b, i] = sum_n coeffs[b, n] exp(+2 pi i n . p_i)`` for a batch ``(B, N1+1, N2+1)``."""
@@ -101,9 +104,11 @@ class FinufftNufft:
         self.counts["set_points"] += 1
 
     def type1(self, values):
+        return self.type1_native(values).astype(np.complex128, copy=False)
+
+    def type1_native(self, values):
         self.counts["type1"] += len(values)
-        out = [self._plan.execute(np.ascontiguousarray(v, dtype=self._complex)) for v in values]
-        return np.stack(out).astype(np.complex128, copy=False)
+        return np.stack([self._plan.execute(np.ascontiguousarray(v, dtype=self._complex)) for v in values])
 
     def type2(self, coeffs):
         self.counts["type2"] += len(coeffs)
@@ -164,7 +169,8 @@ class ResidueSplitNufft:
             # One task per class: a plan is never used by two threads at once (ducc0's plans are not thread-safe).
             _, first_row, nufft = self._classes[residue]
             phase = self._phases[residue]
-            out[:, first_row :: self.threads] = nufft.type1(values if phase is None else values * phase)
+            # Cast into the strided rows directly: no grid-sized double-precision copy per class.
+            out[:, first_row :: self.threads] = nufft.type1_native(values if phase is None else values * phase)
 
         list(thread_pool(self.threads).map(one_class, range(self.threads)))
         return out
