@@ -3,8 +3,12 @@
 ``CufinufftNufft`` has the interface of ``stipple.transforms.Ducc0Nufft`` (``set_points``, ``type1``, ``type2`` on
 NumPy arrays, centred ``(N1+1, N2+1)`` mode grids), so the objective and CG run unchanged on the CPU and only the
 transforms move: each call copies its values to the GPU and its result back. The GPU's type-1 spreading adds with
-atomic operations in no fixed order, so two runs with the same seed agree to rounding, not bit for bit.
+atomic operations in no fixed order, so two runs with the same seed agree to rounding, not bit for bit. CuPy's
+out-of-memory error is a ``MemoryError`` (the command line's "out of memory"); cufinufft's own failures become one
+StippleError.
 """
+
+import contextlib
 
 import numpy as np
 
@@ -48,21 +52,35 @@ class CufinufftNufft:
         self._real, self._complex = precision(epsilon)
         # cufinufft's tolerance is relative to the sum of |values|, like finufft's; a third keeps the same margin.
         options = dict(eps=max(epsilon / 3, 1e-14), dtype=np.dtype(self._complex).name)
-        self._type1 = cufinufft.Plan(1, self.shape, isign=-1, **options)
-        self._type2 = cufinufft.Plan(2, self.shape, isign=+1, **options)
+        with self._failures("make its plans"):
+            self._type1 = cufinufft.Plan(1, self.shape, isign=-1, **options)
+            self._type2 = cufinufft.Plan(2, self.shape, isign=+1, **options)
+
+    @contextlib.contextmanager
+    def _failures(self, what):
+        """cufinufft's failures (a RuntimeError with no cause, most often the GPU's memory) as one StippleError."""
+        try:
+            yield
+        except RuntimeError as error:
+            raise StippleError(
+                f"backend cufinufft could not {what} on a {self.shape[0]} x {self.shape[1]} mode grid ({error}); "
+                "the GPU may be out of memory: try fewer dots, a lower bandwidth or --backend ducc0"
+            ) from None
 
     def set_points(self, points):
         scaled = 2 * np.pi * np.ascontiguousarray(points.T, dtype=self._real)
-        # The plans keep references to these device arrays until the next call.
-        x, y = self._cupy.asarray(scaled[0]), self._cupy.asarray(scaled[1])
-        self._type1.setpts(x, y)
-        self._type2.setpts(x, y)
+        with self._failures(f"set {len(points)} points"):
+            # The plans keep references to these device arrays until the next call.
+            x, y = self._cupy.asarray(scaled[0]), self._cupy.asarray(scaled[1])
+            self._type1.setpts(x, y)
+            self._type2.setpts(x, y)
         self.counts["set_points"] += 1
 
     def _execute(self, plan, batch):
-        device = self._cupy.asarray(np.ascontiguousarray(batch, dtype=self._complex))
-        out = self._cupy.stack([plan.execute(item) for item in device])
-        return out.get().astype(np.complex128, copy=False)
+        with self._failures("transform"):
+            device = self._cupy.asarray(np.ascontiguousarray(batch, dtype=self._complex))
+            out = self._cupy.stack([plan.execute(item) for item in device])
+            return out.get().astype(np.complex128, copy=False)
 
     def type1(self, values):
         """``out[b, n] = sum_i values[b, i] exp(-2 pi i n . p_i)`` for a batch ``(B, M)``."""

@@ -43,3 +43,23 @@ def test_without_the_extra_the_command_gives_one_line(no_cufinufft, tmp_path):
     assert "stipple[gpu]" in result.output and "Traceback" not in result.output
     assert len(result.output.strip().splitlines()) == 1
     assert not output.exists()
+
+
+@pytest.fixture
+def failing_cufinufft(monkeypatch):
+    """A cufinufft whose plans fail as the library does when the GPU's memory runs out, and a CuPy with one
+    device: stand-ins, so that the mapping of the failure is tested without a GPU."""
+    import sys
+    import types
+
+    def plan(*args, **kwargs):
+        raise RuntimeError("Error creating plan.")
+
+    runtime = types.SimpleNamespace(getDeviceCount=lambda: 1, CUDARuntimeError=RuntimeError)
+    monkeypatch.setitem(sys.modules, "cufinufft", types.SimpleNamespace(Plan=plan))
+    monkeypatch.setitem(sys.modules, "cupy", types.SimpleNamespace(cuda=types.SimpleNamespace(runtime=runtime)))
+
+
+def test_a_failing_plan_is_one_error_naming_the_grid(failing_cufinufft):
+    with pytest.raises(StippleError, match=r"could not make its plans on a 2601 x 1301 mode grid .*out of memory"):
+        make_nufft("cufinufft", (2601, 1301), 1e-4, 2)
