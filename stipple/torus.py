@@ -36,7 +36,7 @@ from .transforms import BACKENDS, TorusFourier, centred_modes, make_nufft
 # 10 % less time per iteration (README, Defaults).
 DEFAULT_EPSILON = 1e-7
 # Accuracy asked of the derivatives' transforms by ``stipple torus`` (gradient and Hessian forms, in single precision:
-# ``stipple.transforms.precision``); the residual keeps ``epsilon``. Measured on the portrait and at M = 200000
+# ``stipple.precision.precision``); the residual keeps ``epsilon``. Measured on the portrait and at M = 200000
 # after 40 iterations: the gradient within 1.4e-5 of the double-precision one, the Hessian form within 2e-8, the
 # same energies to 8 digits after 60 iterations (docs/performance.md).
 DERIVATIVE_EPSILON = 1e-4

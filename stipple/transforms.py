@@ -19,7 +19,7 @@ import functools
 import numpy as np
 
 from .parallel import map_blocks, sum_blocks, thread_pool
-from .precision import SINGLE_PRECISION_EPSILON, precision  # noqa: F401 (both are part of this module's interface)
+from .precision import precision
 
 # "cufinufft" runs on an NVIDIA GPU (``stipple.gpu``, the ``gpu`` extra).
 BACKENDS = ("ducc0", "finufft", "cufinufft")

@@ -3,6 +3,7 @@ import pytest
 from conftest import backend_params
 
 import stipple.transforms
+from stipple.precision import SINGLE_PRECISION_EPSILON, precision
 from stipple.transforms import (
     BACKENDS,
     Ducc0Nufft,
@@ -146,5 +147,5 @@ def test_single_precision_transforms_against_direct_sums(monkeypatch, backend, t
 
 
 def test_precision_follows_epsilon():
-    assert stipple.transforms.precision(stipple.transforms.SINGLE_PRECISION_EPSILON) == (np.float32, np.complex64)
-    assert stipple.transforms.precision(1e-7) == (np.float64, np.complex128)
+    assert precision(SINGLE_PRECISION_EPSILON) == (np.float32, np.complex64)
+    assert precision(1e-7) == (np.float64, np.complex128)
