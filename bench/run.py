@@ -22,12 +22,12 @@ import resource
 import subprocess
 import sys
 import time
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
 from stipple.allocator import reuse_freed_memory
+from stipple.checkpoint import LIBRARIES, library_versions
 from stipple.halftone import default_threads, run
 from stipple.io.images import load_density
 from stipple.sphere import CellMap, from_lon_lat, sphere_problem
@@ -157,13 +157,8 @@ def scale_case(arguments):
 
 
 def versions():
-    found = {"python": platform.python_version()}
-    for name in ("numpy", "scipy", "ducc0", "finufft", "cufinufft", "cupy", "stipple"):
-        try:
-            found[name] = version(name)
-        except PackageNotFoundError:  # an optional one, or stipple run from its source tree
-            found[name] = None
-    return found
+    """Python's and the libraries' versions, the GPU's transforms too ("unknown" where one is not installed)."""
+    return {"python": platform.python_version(), **library_versions(LIBRARIES + ("cufinufft",))}
 
 
 def main(argv=None):

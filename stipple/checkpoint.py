@@ -32,9 +32,13 @@ def fingerprint(problem):
     return hashlib.sha256(np.ascontiguousarray(problem.discrepancy.target).tobytes()).hexdigest()
 
 
-def library_versions():
+LIBRARIES = ("stipple", "numpy", "scipy", "ducc0", "finufft")
+
+
+def library_versions(names=LIBRARIES):
+    """The installed version of each of ``names`` ("unknown" where one is not installed as a distribution)."""
     found = {}
-    for name in ("stipple", "numpy", "scipy", "ducc0", "finufft"):
+    for name in names:
         try:
             found[name] = version(name)
         except PackageNotFoundError:
