@@ -239,7 +239,7 @@ def run(
         state = load_checkpoint(checkpoint, problem)
     else:
         state = _start_state(problem, init, seed, levels, time_limit, callback)
-    corrects = correct and problem.coarse is not None and _correction_bandwidth(problem) >= 4 * max(COARSE_LEVELS)[0]
+    corrects = correct and problem.coarse is not None and correction_bandwidth(problem) >= 4 * max(COARSE_LEVELS)[0]
     main_limit = None
     if time_limit is not None:
         share = 1 - COARSE_TIME_SHARE if corrects else 1.0
@@ -331,7 +331,7 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
     started = time.perf_counter()
     points, corrections, summary = result.points, [], []
     for factor, iterations in levels:
-        coarse = problem.coarse(even_at_least_2(_correction_bandwidth(problem) / factor))
+        coarse = problem.coarse(even_at_least_2(correction_bandwidth(problem) / factor))
         remaining = time_left(time_limit, started)
         correction = minimize(
             coarse.objective,
@@ -361,7 +361,8 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
     )
 
 
-def _correction_bandwidth(problem):
+def correction_bandwidth(problem):
+    """The N that the low-frequency corrections divide: ``problem.correction_bandwidth``, else its bandwidth."""
     return problem.correction_bandwidth or problem.bandwidth
 
 

@@ -6,14 +6,15 @@ dots near a change: within ``free_margin`` spacings of a pixel whose darkness di
 what the dots there were last placed for, both as it is and blurred at one spacing (``free_dots``). The other dots
 are pinned (``PinnedTorus``): left free, one CG step spreads a local change over the whole picture (M = 20000:
 still dots moved 0.25 of their spacing per frame), and the still parts of the video would boil. Then, where the
-darkness changed at all, the low-frequency correction runs over all dots (``WARM_LEVELS``): smooth deformations
-that bring the ink a moving object needs from wherever it is, and leave the still dots' local arrangement as it
-is (they move a median 0.01-0.02 spacings). After a scene cut (``frame_change`` above ``CUT``) the dots of the
+darkness changed at all, a correction moves all dots by smooth deformations: first one field chosen by CG on the
+frame's whole objective (``WARM_DEFORMATION``, ``stipple.deformation``), then CG on the plain ``E_N`` of a low
+bandwidth (``WARM_LEVELS``). They bring the ink a moving object needs from wherever it is and fix the low and
+middle frequencies a viewer sees, and leave the still dots' local arrangement as it is (they move a median
+0.01-0.02 spacings). After a scene cut (``frame_change`` above ``CUT``) the dots of the
 changed parts make as many iterations as a cold run. The measurements that chose these settings are in
 docs/video.md.
 """
 
-import os
 import time
 from dataclasses import dataclass, replace
 
@@ -21,28 +22,37 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt, gaussian_filter
 
 from .colour import palette_label
+from .deformation import deform
 from .errors import StippleError
-from .halftone import check_integer, correct_low_frequencies, run
-from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
+from .halftone import check_integer, correct_low_frequencies, correction_bandwidth, even_at_least_2, run
+from .io.video import frame_fingerprint
 from .manifolds import PinnedTorus
 from .sampling import pixel_indices
 from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
 from .video_inks import Inks
+from .video_keeper import FrameKeeper
 
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
-# left 4-12 % and the dots' moves in still regions were the same (docs/video.md).
-FRAME_ITERATIONS = 20
+# left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 leave every
+# frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px (20: 2.0 dB) and keep a warm frame under
+# 0.3 of a cold one's time (docs/video.md).
+FRAME_ITERATIONS = 16
 # A warm frame moves the dots within FREE_MARGIN dot spacings of a change in darkness above CHANGE (blurred at one
 # spacing, against the darkness the dots there were placed for); 8-bit noise and compression stay below it.
 CHANGE = 0.02
 FREE_MARGIN = 3.0
-# After the pinned phase every warm frame whose darkness changed makes a low-frequency correction over all dots:
-# for each (factor, iterations), CG on the plain E_N at N / factor. Without it the ink a moving object needs came
-# only from the freed dots around it (a light halo ahead of a moving disc, E_N at N = 128 2.5 x a cold run's);
-# the cold run's two levels (N / 6, N / 12) left a pan 7 dB below a cold run at sigma 4 px, a level at N / 3 brings
-# it within 3 dB; a level at N / 12 changed nothing at N = 214 and at N = 48 (4 modes) moved still dots 0.05-0.11
-# spacings a frame (docs/video.md).
-WARM_LEVELS = ((3, 5), (6, 10))
+# After the pinned phase every warm frame whose darkness changed is corrected over all dots, in two steps. First
+# WARM_DEFORMATION = (factor, iterations): CG moves every dot by one smooth displacement field of bandwidth N / factor
+# to lower the frame's whole objective (``stipple.deformation``). It fixes the middle frequencies that the pinned
+# iterations leave (on a fade, 3-5 times a cold run's error at 12-24 cycles per image, where a blur of 4 px still
+# sees them) without stirring the high ones: the plain E_N at N / 3 of the previous correction could not, and at
+# N / 4 it stirred the light parts of a gradient, where the dots are sparser than its modes (docs/video.md).
+WARM_DEFORMATION = (4, 8)
+# Then, for each (factor, iterations), CG on the plain E_N at N / factor over all dots: the lowest frequencies.
+# Without the two, the ink a moving object needs came only from the freed dots around it (a light halo ahead of
+# a moving disc, E_N at N = 128 2.5 x a cold run's); the deformation without this level left the photo clips
+# 8-10 dB below a cold run at sigma 4 px; a level at N / 12 after it changed nothing.
+WARM_LEVELS = ((6, 10),)
 # A scene cut: the darkness, blurred at one dot spacing, changed by more than CUT on average over the frame (a cut
 # between two photos: 0.15; a pan, a fade, a moving object: at most 0.012 per frame). The freed dots then make up
 # to ``iterations`` CG iterations under the cold run's stopping rule, not ``frame_iterations``.
@@ -168,7 +178,7 @@ def stipple_video(
     check_integer("frame iterations", settings.frame_iterations, 0, 10**6)
     if key is not None:
         identity = {**(identity or {}), "key": frame_fingerprint(np.concatenate([np.ravel(k) for k in key]))}
-    keeper = _Keeper(checkpoint, _defining(settings, identity), checkpoint_seconds, checkpoint_frames, resume)
+    keeper = FrameKeeper(checkpoint, _defining(settings, identity), checkpoint_seconds, checkpoint_frames, resume)
     bandwidth, timings, status, position = settings.bandwidth, [], "finished", -1
     reference, free = (None, None) if key is None else (key[1], None)
     previous, before = (None, None) if key is None else key
@@ -187,7 +197,8 @@ def stipple_video(
         if previous is not None:
             margin = min(settings.free_margin, CUT_MARGIN) if change > CUT else settings.free_margin
             free, reference = free_dots(previous, reference, weights, replace(settings, free_margin=margin))
-        frame = keeper.replay(position, index, weights)
+        saved = keeper.replay(position, index, weights)
+        frame = None if saved is None else Frame(index, saved, weights, position > 0, True)
         if frame is None:
             frame = _optimise(weights, index, previous, free, bandwidth, settings, stop, change, inks)
             if frame is None:
@@ -287,7 +298,7 @@ def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=
 def _warm(problem, previous, free, settings, stop, change):
     """A warm frame: at most ``frame_iterations`` CG iterations moving the ``free`` dots only (the others pinned;
     after a scene cut, ``change`` above ``CUT``, up to ``iterations``), then, where the darkness changed at all,
-    the low-frequency correction over all dots (``WARM_LEVELS``)."""
+    the correction over all dots (``_correct``)."""
     options = _run_options(settings, stop)
     changed = change > 0
     if not free.any() and not (changed and settings.correct):
@@ -300,8 +311,28 @@ def _warm(problem, previous, free, settings, stop, change):
         correct=False,
         **options,
     )
-    if result.status == "stopped" or not (changed and settings.correct) or not WARM_LEVELS:
+    if result.status == "stopped" or not (changed and settings.correct):
         return result
+    return _correct(problem, result, settings, stop)
+
+
+def _correct(problem, result, settings, stop):
+    """A warm frame's correction over all dots: the smooth deformation (``WARM_DEFORMATION``), then the plain
+    ``E_N`` levels (``WARM_LEVELS``); the result counts their iterations."""
+    factor, iterations = WARM_DEFORMATION
+    shown = None if stop is None else (lambda _: stop(result.state))
+    points, deformed = deform(
+        problem.objective,
+        problem.manifold.scale,
+        result.points,
+        even_at_least_2(correction_bandwidth(problem) / factor),
+        iterations,
+        time_limit=settings.time_limit,
+        callback=shown,
+    )
+    if deformed.status == "stopped":
+        return replace(result, status="stopped")
+    result = replace(result, points=points, iterations=result.iterations + deformed.iterations)
     result = correct_low_frequencies(problem, result, settings.time_limit, stop, levels=WARM_LEVELS)
     if any(level.status == "stopped" for level in result.corrections):
         return replace(result, status="stopped")
@@ -375,56 +406,3 @@ def _result(status, frames, timings, seconds, cold_first=True):
     if status == "stopped":
         message = f"stopped after {message}"
     return VideoResult(status, message, frames, len(timings), seconds, cold, average)
-
-
-class _Keeper:
-    """The finished frames' dots for the checkpoint: replayed on resume, saved every so often and at the end."""
-
-    def __init__(self, path, settings, seconds, frames, resume):
-        self.path, self.settings, self.seconds, self.every = path, settings, seconds, frames
-        self.points, self.indices, self.fingerprints = [], [], []
-        self.saved = (time.monotonic(), 0)
-        if path is None:
-            if resume:
-                raise StippleError("resume needs a checkpoint file")
-            return
-        if not resume and os.path.exists(path):
-            raise StippleError(f"{path}: checkpoint exists; resume it or remove it first")
-        if resume:
-            points, self.indices, self.fingerprints = load_video_checkpoint(path, settings)
-            self.points = list(points)
-            self.saved = (time.monotonic(), len(self.points))
-
-    @property
-    def count(self):
-        return len(self.indices)
-
-    def replay(self, position, index, weights):
-        """The saved frame at ``position``, checked against the input, or None past the saved frames."""
-        if self.path is None or position >= len(self.points):
-            return None
-        if self.indices[position] != index or self.fingerprints[position] != frame_fingerprint(weights):
-            raise StippleError(f"{self.path}: checkpoint is for another input: frame {index} differs")
-        return Frame(index, self.points[position], weights, position > 0, True)
-
-    def add(self, frame, weights):
-        self.indices.append(frame.index)
-        if self.path is None:
-            return
-        self.points.append(frame.points)
-        self.fingerprints.append(frame_fingerprint(weights))
-        due_time = self.seconds is not None and time.monotonic() - self.saved[0] >= self.seconds
-        due_count = self.every is not None and len(self.points) - self.saved[1] >= self.every
-        if due_time or due_count:
-            self.save()
-
-    def finish(self, status, seen):
-        """Save the finished frames; refuse a finished run that saw fewer frames than the checkpoint holds."""
-        if status == "finished" and seen < len(self.points):
-            raise StippleError(f"{self.path}: checkpoint holds {len(self.points)} frames, the input only {seen}")
-        if self.path is not None and self.points:
-            self.save()
-
-    def save(self):
-        save_video_checkpoint(self.path, self.points, self.settings, self.indices, self.fingerprints)
-        self.saved = (time.monotonic(), len(self.points))

@@ -41,7 +41,8 @@ DEFAULT_FPS = 24.0
     "--correct/--no-correct",
     default=True,
     show_default=True,
-    help="Frame 0's low-frequency correction (warm-started frames never make it).",
+    help="The low-frequency correction: frame 0's, and the smooth deformation and levels of every later frame "
+    "whose darkness changed.",
 )
 @click.option(
     "--frame-iterations",
