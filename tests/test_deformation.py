@@ -61,22 +61,24 @@ def deformed_problem(rng, hessian):
     return DeformedObjective(problem.objective, Deformation(points, BANDWIDTHS))
 
 
-def test_gradient_in_the_coefficients_has_taylor_slope_two(rng):
-    objective = deformed_problem(rng, "gauss-newton")
+def first_order(objective, rng):
+    """``(start, direction, energy, linear term)`` at no displacement, along a random direction."""
     start = objective.deformation.zero()
     direction = random_coeffs(rng, objective.deformation, 0.01)
     objective.set_points(start)
-    energy, linear = objective.energy(), np.dot(objective.gradient(), direction)
+    return start, direction, objective.energy(), np.dot(objective.gradient(), direction)
+
+
+def test_gradient_in_the_coefficients_has_taylor_slope_two(rng):
+    objective = deformed_problem(rng, "gauss-newton")
+    start, direction, energy, linear = first_order(objective, rng)
     remainder = lambda t: energy_at(objective, start + t * direction) - energy - t * linear  # noqa: E731
     assert taylor_slope(remainder, STEPS) == pytest.approx(2, abs=0.1)
 
 
 def test_full_hessian_form_in_the_coefficients_has_taylor_slope_three(rng):
     objective = deformed_problem(rng, "full")
-    start = objective.deformation.zero()
-    direction = random_coeffs(rng, objective.deformation, 0.01)
-    objective.set_points(start)
-    energy, linear = objective.energy(), np.dot(objective.gradient(), direction)
+    start, direction, energy, linear = first_order(objective, rng)
     quadratic = 0.5 * objective.hessian_gram([direction])[0, 0]
 
     def remainder(t):
