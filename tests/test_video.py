@@ -107,6 +107,22 @@ def test_moving_dots_follow_the_disc():
         assert inside.sum() > 2 * COUNT * np.pi * (0.1 * rows) ** 2 / (rows * columns)  # denser than average
 
 
+def test_a_stop_during_the_correction_drops_the_frame():
+    # Without pinned iterations a warm frame's first CG state is the pinned phase's start; the next ones are the
+    # correction's (the deformation's, then the levels').
+    done, calls = [], []
+
+    def stop_in_the_correction(state):
+        calls.extend([state] if len(done) == 1 else [])
+        return len(calls) == 2
+
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1, frame_iterations=0)
+    result = stipple_video(
+        enumerate(1 - g for g in moving_disc(3)), settings, on_frame=done.append, stop=stop_in_the_correction
+    )
+    assert result.status == "stopped" and result.frames == 1 and len(done) == 1 and len(calls) == 2
+
+
 def test_a_resumed_run_gives_the_uninterrupted_runs_dots(tmp_path):
     clip = moving_disc(5)
     _, whole = stippled(clip)
