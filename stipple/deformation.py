@@ -16,7 +16,8 @@ from .halftone import even_at_least_2
 from .optimize import minimize
 from .transforms import make_nufft, torus_modes
 
-# The displacement field's transforms are small; one thread avoids the pool's overhead at every call.
+# The displacement field's transforms are small: ducc0 on one thread, whatever the objective's backend (the pool's
+# overhead at every call would exceed the work).
 THREADS = 1
 EPSILON = 1e-9
 

@@ -33,9 +33,9 @@ from .video_inks import Inks
 from .video_keeper import FrameKeeper
 
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
-# left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 leave every
-# frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px (20: 2.0 dB) and keep a warm frame under
-# 0.3 of a cold one's time (docs/video.md).
+# left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 (and 8
+# deformation iterations) leave every frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px in
+# 0.26-0.27 of a cold frame's time (20 and 10: 2.0 dB in 0.31-0.33; docs/video.md).
 FRAME_ITERATIONS = 16
 # A warm frame moves the dots within FREE_MARGIN dot spacings of a change in darkness above CHANGE (blurred at one
 # spacing, against the darkness the dots there were placed for); 8-bit noise and compression stay below it.
