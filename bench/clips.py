@@ -155,6 +155,30 @@ def cut_clip(frames=16, width=208, height=128, at=None):
     return clip
 
 
+def zoom_clip(frames=12, width=256, height=160, band=56):
+    """A held-out clip (not used to choose any setting): a slow zoom (1.5 % per frame) into scikit-image's
+    astronaut photo, beside a still band of dark blocks (15 % and 40 % gray) on the left."""
+    import skimage.color
+    import skimage.data
+
+    image = Image.fromarray((skimage.color.rgb2gray(skimage.data.astronaut()) * 255).astype(np.uint8))
+    y, x = np.mgrid[0:height, 0:band] + 0.5
+    still = 0.15 + 0.25 * (np.sin(x / 5.0) * np.cos(y / 7.0) > 0)
+    columns, rows = image.size
+    clip = []
+    for k in range(frames):
+        scale = 1 - 0.015 * k
+        box = (
+            columns * (1 - scale) / 2,
+            rows * ((1 - scale) / 2 + 0.05),
+            columns * (1 + scale) / 2,
+            rows * ((1 + scale) / 2 - 0.25),
+        )
+        view = np.asarray(image.resize((width - band, height), Image.Resampling.LANCZOS, box=box), float) / 255
+        clip.append(np.round(255 * np.hstack([still, view])).astype(np.uint8))
+    return clip
+
+
 def colour_clip(frames=8, width=208, height=128):
     """uint8 RGB frames: scikit-image's coffee photo with a red disc (radius 12 px) moving right 3 px per frame
     across it, above a still strip that runs from cyan to yellow."""

@@ -5,7 +5,8 @@
 Gray clips (``bench/clips.py``, 208 x 128 px): ``disc``, the issue's dark disc moving along a sine over a horizontal
 gradient; ``pan``, a photo sliding under a still caption strip; ``fade``, a cross-fade between two photos above
 the strip; ``cut``, a moving disc over a photo that cuts to another one half-way; ``disc-h264`` (not by default,
-needs PyAV), the disc clip after an H.264 round trip. Per frame, ``stipple_video``'s
+needs PyAV), the disc clip after an H.264 round trip; ``zoom`` (not by default), a held-out slow zoom into a
+photo beside a still band, 256 x 160 px. Per frame, ``stipple_video``'s
 dots (``warm``) against a cold run of the frame on its own (``halftone_torus``, seed 0):
 
 * ``E_N`` at N = 128 (the plain bandlimited error, no near field; low frequencies, where a viewer looks);
@@ -36,7 +37,16 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from clips import colour_clip, cut_clip, disc_clip, fade_clip, pan_clip, still_mask, through_h264  # noqa: E402
+from clips import (  # noqa: E402
+    colour_clip,
+    cut_clip,
+    disc_clip,
+    fade_clip,
+    pan_clip,
+    still_mask,
+    through_h264,
+    zoom_clip,
+)
 from video import densities, pair_moves, spacing  # noqa: E402
 
 from stipple.colour import halftone_colour  # noqa: E402
@@ -47,8 +57,12 @@ from stipple.torus import default_bandwidth, halftone_torus, torus_problem  # no
 from stipple.video import VideoSettings, stipple_video  # noqa: E402
 
 CLIPS = {"disc": disc_clip, "pan": pan_clip, "fade": fade_clip, "cut": cut_clip}
-# Not by default: the issue's clip after an H.264 round trip (needs PyAV).
-EXTRA = {"disc-h264": lambda frames: through_h264(disc_clip(frames), Path(tempfile.mkdtemp()) / "disc.mp4")}
+# Not by default: the issue's clip after an H.264 round trip (needs PyAV), and a held-out zoom (256 x 160 px; the
+# bench's notes ran it with -M 4000 --frames 12).
+EXTRA = {
+    "disc-h264": lambda frames: through_h264(disc_clip(frames), Path(tempfile.mkdtemp()) / "disc.mp4"),
+    "zoom": zoom_clip,
+}
 LOW_BANDWIDTH = 128
 SIGMAS = (1.0, 2.0, 4.0)
 
