@@ -12,8 +12,8 @@ arrangement (the high frequencies, which the plain ``E_N`` of a low bandwidth ca
 
 import numpy as np
 
-from .halftone import even_at_least_2
 from .optimize import minimize
+from .torus import scaled_bandwidths
 from .transforms import make_nufft, torus_modes
 
 # The displacement field's transforms are small: ducc0 on one thread, whatever the objective's backend (the pool's
@@ -142,8 +142,7 @@ def deform(objective, scale, points, bandwidth, iterations, *, time_limit=None, 
     (numpy.ndarray, OptimizeResult)
         The moved points and CG's result in the coefficients.
     """
-    bandwidths = tuple(even_at_least_2(bandwidth * side) for side in np.asarray(scale, dtype=float))
-    deformation = Deformation(points, bandwidths)
+    deformation = Deformation(points, scaled_bandwidths(bandwidth, np.asarray(scale, dtype=float)))
     result = minimize(
         DeformedObjective(objective, deformation),
         DeformationSpace(scale, deformation),

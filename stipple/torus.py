@@ -131,9 +131,15 @@ def torus_scale(shape):
 
 
 def axis_bandwidths(bandwidth, shape):
-    """Per-axis bandwidths ``(N1, N2)`` (x, y), even, giving the same resolution in both directions."""
-    scale = torus_scale(shape)
-    return tuple(even_at_least_2(bandwidth * s) for s in scale)
+    """Per-axis bandwidths ``(N1, N2)`` (x, y) of a ``(H, W)`` grid, even, giving the same resolution in both
+    directions."""
+    return scaled_bandwidths(bandwidth, torus_scale(shape))
+
+
+def scaled_bandwidths(bandwidth, scale):
+    """Per-axis bandwidths ``(N1, N2)`` for a torus of side lengths ``scale``: ``bandwidth`` along the longer side,
+    in proportion along the other, each even."""
+    return tuple(even_at_least_2(bandwidth * side) for side in scale)
 
 
 def cell_factor(k, cells):
