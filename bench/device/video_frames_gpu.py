@@ -4,9 +4,10 @@
 
 For the bench's disc and fade clips (gray) and its colour clip (cmyk, measured on the union of the inks):
 ``stipple_video`` with each backend, the same settings and threads; per frame E_N at N = 128 (second backend
-over first) and the PSNR of the exactly blurred dots at sigma 4 px (second minus first), and the median seconds of
-the warm frames of each. The backends agree to rounding per transform, so their frames drift apart slowly: the
-check is that the second's frames are as good as the first's, not the same bits.
+over first) and the PSNR of the exactly blurred dots at sigma 4 px (second minus first; both as
+``bench/video_frames.py`` measures them), and the median seconds of the warm frames of each. The backends agree
+to rounding per transform, so their frames drift apart slowly: the check is that the second's frames are as good
+as the first's, not the same bits.
 """
 
 import argparse
@@ -19,9 +20,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from clips import colour_clip, disc_clip, fade_clip  # noqa: E402
 from video import densities  # noqa: E402
+from video_frames import frame_measures  # noqa: E402
 
-from stipple.measures.evaluate import discrepancy_energy, exact_blurs, psnr  # noqa: E402
-from stipple.torus import default_bandwidth, torus_problem  # noqa: E402
+from stipple.halftone import default_threads  # noqa: E402
+from stipple.torus import default_bandwidth  # noqa: E402
 from stipple.video import VideoSettings, stipple_video  # noqa: E402
 
 COUNT = 2000
@@ -43,10 +45,13 @@ def compare(name, clip, backends, palette=None):
     per_frame = []
     for one, other in zip(first, second, strict=True):
         weights = one.density if palette is None else one.density.sum(axis=0)
-        problem = torus_problem(weights, COUNT, 128, near_field=False)
-        energies = [discrepancy_energy(problem, frame.points) for frame in (one, other)]
-        psnrs = [psnr(*exact_blurs(weights, frame.points, 4.0)) for frame in (one, other)]
-        per_frame.append({"energy_ratio": energies[1] / energies[0], "psnr4_difference": psnrs[1] - psnrs[0]})
+        measures = [frame_measures(weights, frame.points, COUNT, default_threads()) for frame in (one, other)]
+        per_frame.append(
+            {
+                "energy_ratio": measures[1]["energy"] / measures[0]["energy"],
+                "psnr4_difference": measures[1]["psnr"][-1] - measures[0]["psnr"][-1],
+            }
+        )
     return {
         "clip": name,
         "backends": list(backends),
