@@ -180,6 +180,18 @@ class NearKernel:
         q, q1, q2 = self._polynomial(r)
         return g - q, g1 - q1, g2 - q2
 
+    def pair_terms(self, distance):
+        """``(sum of K, K'/r, K'')`` at distances ``0 < r < radius``: what the pair sums need. The polynomial's
+        parts are evaluated in ``r²`` (its ``q'/r`` without a division)."""
+        a = self.coeffs
+        square = distance * distance
+        g, g1, g2 = self.profile(distance, orders=3)
+        q = a[0] + square * (a[1] + square * (a[2] + square * (a[3] + square * a[4])))
+        q1_over_r = 2 * a[1] + square * (4 * a[2] + square * (6 * a[3] + square * (8 * a[4])))
+        q2 = 2 * a[1] + square * (12 * a[2] + square * (30 * a[3] + square * (56 * a[4])))
+        # K is a small difference of g and q (both near g(0)): summed after subtracting, not before.
+        return float(np.sum(g - q)), g1 / distance - q1_over_r, g2 - q2
+
     def _polynomial(self, r):
         a = self.coeffs
         r2 = r * r

@@ -42,3 +42,10 @@ def map_blocks(threads, function, *arrays):
 def sum_blocks(threads, function, *arrays):
     """The sum of ``map_blocks``' results, added in block order (a float)."""
     return float(sum(map_blocks(threads, function, *arrays)))
+
+
+def map_items(threads, function, items):
+    """``[function(item) for item in items]`` on the pool (in the calling thread for one item or thread)."""
+    if threads == 1 or len(items) == 1:
+        return [function(item) for item in items]
+    return list(thread_pool(threads).map(function, items))
