@@ -82,3 +82,6 @@ def test_pair_blocks_match_all_pairs_and_one_block(monkeypatch, rng):
     assert threaded.energy() == pytest.approx(expected, rel=1e-12)
     assert np.allclose(threaded.gradient(), single.gradient(), rtol=1e-12, atol=1e-15 * np.abs(single.gradient()).max())
     assert threaded.hessian_gram([direction])[0, 0] == pytest.approx(single.hessian_gram([direction])[0, 0], rel=1e-12)
+    (product,), (expected_product,) = threaded.hessian_vectors([direction]), single.hessian_vectors([direction])
+    assert np.allclose(product, expected_product, rtol=1e-12, atol=1e-15 * np.abs(expected_product).max())
+    assert np.array_equal(np.sort(threaded.pairs()[0]), np.sort(single.pairs()[0]))
