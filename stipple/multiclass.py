@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import StippleError
-from .halftone import Problem, check_bandwidth, run
+from .halftone import Problem, check_bandwidth, check_threads, default_threads, run
+from .parallel import map_items
 from .torus import DEFAULT_EPSILON, check_weights, default_bandwidth, torus_problem
 
 
@@ -61,40 +62,51 @@ class MulticlassObjective:
         The points each term sees (``slice(None)`` for all of them).
     weights : sequence of float
         The factors ``a_t``.
+    threads : int
+        Terms evaluated at once on the process's pool (``stipple.parallel``); more than 1 only for terms that use
+        no thread of the pool themselves (built with one thread). The terms' results are added in term order:
+        the same bits for any count.
     """
 
-    def __init__(self, terms, slices, weights):
+    def __init__(self, terms, slices, weights, threads=1):
         if not len(terms) == len(slices) == len(weights):
             raise ValueError("terms, slices and weights must have the same length")
         self.terms = list(terms)
         self.slices = list(slices)
         self.weights = [float(weight) for weight in weights]
+        self.threads = threads
         self._shape = None
 
     def set_points(self, points):
         """Move every term with a non-zero factor to its points."""
         self._shape = points.shape
-        for term, part, _ in self._weighted():
-            term.set_points(points[part])
+        self._each(lambda term, part: term.set_points(points[part]))
 
     def energy(self):
         return float(sum(weight * term.energy() for term, _, weight in self._weighted()))
 
     def gradient(self):
         total = np.zeros(self._shape)
-        for term, part, weight in self._weighted():
-            total[part] += weight * term.gradient()
+        gradients = self._each(lambda term, _: term.gradient())
+        for (_, part, weight), gradient in zip(self._weighted(), gradients, strict=True):
+            total[part] += weight * gradient
         return total
 
     def hessian_gram(self, vectors):
-        return sum(weight * term.hessian_gram([v[part] for v in vectors]) for term, part, weight in self._weighted())
+        grams = self._each(lambda term, part: term.hessian_gram([v[part] for v in vectors]))
+        return sum(weight * gram for (_, _, weight), gram in zip(self._weighted(), grams, strict=True))
 
     def hessian_vectors(self, vectors):
         products = [np.zeros(self._shape) for _ in vectors]
-        for term, part, weight in self._weighted():
-            for product, value in zip(products, term.hessian_vectors([v[part] for v in vectors]), strict=True):
+        values = self._each(lambda term, part: term.hessian_vectors([v[part] for v in vectors]))
+        for (_, part, weight), term_products in zip(self._weighted(), values, strict=True):
+            for product, value in zip(products, term_products, strict=True):
                 product[part] += weight * value
         return products
+
+    def _each(self, function):
+        """``[function(term, part) for each weighted term]``, on ``threads`` of the pool."""
+        return map_items(self.threads, lambda item: function(item[0], item[1]), self._weighted())
 
     def _weighted(self):
         return [item for item in zip(self.terms, self.slices, self.weights, strict=True) if item[2] != 0]
@@ -203,13 +215,23 @@ def multiclass_problem(
         shares = np.where(masses > 0, (counts / n_points) * masses.sum() / np.maximum(masses, 1e-300), 0.0)
         union_density = sum(share * weights for share, weights in zip(shares, densities, strict=True))
     kept = [index for index, count in enumerate(counts) if count > 0]
-    options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
+    weights = [term_weights[index] for index in kept] + [term_weights[-1]]
+    threads = default_threads() if threads is None else check_threads(threads)
+    # Several terms run at once, each on one thread: their transforms are too small for the blocks of one term to
+    # pay (colour, 100 iterations on 2 cores: 9.3 s against 10.4-10.8 s; docs/performance.md).
+    term_threads = 1 if sum(weight != 0 for weight in weights) > 1 else threads
+    options = {
+        "backend": backend,
+        "threads": term_threads,
+        "epsilon": epsilon,
+        "hessian": hessian,
+        "near_field": near_field,
+    }
     union = torus_problem(union_density, n_points, bandwidth, **options, **TERM_SETTINGS)
     classes = [term_problem(densities[index], counts[index], n_points, bandwidth, options) for index in kept]
     slices = class_slices(counts[kept])
-    weights = [term_weights[index] for index in kept] + [term_weights[-1]]
     terms = [part.objective for part in classes] + [union.objective]
-    objective = MulticlassObjective(terms, [*slices, slice(None)], weights)
+    objective = MulticlassObjective(terms, [*slices, slice(None)], weights, threads=threads if term_threads == 1 else 1)
     return MulticlassProblem(
         domain="torus",
         manifold=union.manifold,

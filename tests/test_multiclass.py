@@ -112,6 +112,33 @@ def test_hessian_gram_is_the_hessian_vectors_inner_products(rng):
     assert gram[0, 1] == pytest.approx(gram[1, 0]) and np.all(np.linalg.eigvalsh(gram) > 0)
 
 
+def test_terms_on_threads_of_their_own_give_the_one_thread_bits(rng):
+    """With several threads the terms run at once, each built with one thread: every derivative has the bits of
+    the one-thread problem, whatever order the terms finish in."""
+    shape = (10, 14)
+    densities = [rng.random(shape), rng.random(shape) ** 2, rng.random(shape)]
+    single, threaded = (multiclass_problem(densities, 90, 16, threads=count) for count in (1, 3))
+    assert threaded.objective.threads == 3 and single.objective.threads == 1
+    assert all(term.terms[0].threads == 1 for term in threaded.objective.terms)
+    points = single.sample(rng, 90)
+    fields = [rng.standard_normal(points.shape) for _ in range(2)]
+    results = []
+    for problem in (single, threaded, threaded):
+        objective = problem.objective
+        objective.set_points(points)
+        results.append(
+            [
+                objective.energy(),
+                objective.gradient(),
+                objective.hessian_gram(fields),
+                *objective.hessian_vectors(fields),
+            ]
+        )
+    for threaded_result in results[1:]:
+        for mine, theirs in zip(threaded_result, results[0], strict=True):
+            np.testing.assert_array_equal(mine, theirs)
+
+
 def test_joint_classes_are_blue_noise_each_and_together():
     """Two flat classes: optimised jointly, the union has no close pairs; optimised apart, it clumps."""
     flat = np.ones((16, 16))
