@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from .parallel import map_blocks, sum_blocks
+from .parallel import map_blocks, map_terms, sum_blocks
 
 
 class Discrepancy:
@@ -172,24 +172,34 @@ def _real_view(coeffs):
 
 
 class SumObjective:
-    """The sum of objectives at the same points (the transform part and the near field): what CG drives."""
+    """The sum of objectives at the same points (the transform part and the near field): what CG drives.
 
-    def __init__(self, *terms):
+    With ``concurrent`` the terms are evaluated at once, each on a thread of its own (``stipple.parallel.map_terms``;
+    the terms then share the threads between them, see ``stipple.torus.torus_problem``), and their results are
+    added in term order: the same bits as one after the other.
+    """
+
+    def __init__(self, *terms, concurrent=False):
         self.terms = terms
+        self.concurrent = concurrent
 
     def set_points(self, points):
-        for term in self.terms:
-            term.set_points(points)
+        self._each(lambda term: term.set_points(points))
 
     def energy(self):
         return sum(term.energy() for term in self.terms)
 
     def gradient(self):
-        return sum(term.gradient() for term in self.terms)
+        return sum(self._each(lambda term: term.gradient()))
 
     def hessian_gram(self, vectors):
-        return sum(term.hessian_gram(vectors) for term in self.terms)
+        return sum(self._each(lambda term: term.hessian_gram(vectors)))
 
     def hessian_vectors(self, vectors):
-        per_term = [term.hessian_vectors(vectors) for term in self.terms]
+        per_term = self._each(lambda term: term.hessian_vectors(vectors))
         return [sum(products) for products in zip(*per_term, strict=True)]
+
+    def _each(self, function):
+        if self.concurrent:
+            return map_terms(function, self.terms)
+        return [function(term) for term in self.terms]

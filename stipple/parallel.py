@@ -20,6 +20,19 @@ def thread_pool(threads):
     return ThreadPoolExecutor(threads, thread_name_prefix="stipple")
 
 
+@functools.cache
+def term_pool(count):
+    """A pool of ``count`` threads for whole terms of an objective, apart from ``thread_pool``'s: a term may hand
+    its blocks to ``thread_pool`` and wait for them (one pool for both could fill with waiting terms)."""
+    return ThreadPoolExecutor(count, thread_name_prefix="stipple-term")
+
+
+def map_terms(function, terms):
+    """``[function(term) for term in terms]``, every term on a thread of its own (``term_pool``). The terms'
+    work must not itself wait on ``term_pool``."""
+    return list(term_pool(len(terms)).map(function, terms))
+
+
 def row_blocks(array, threads):
     """Slices of ``array``'s first axis: ``threads`` nearly equal blocks, fewer for a small array."""
     rows = len(array)

@@ -86,11 +86,18 @@ def test_extending_a_finished_run_with_more_iterations(tmp_path):
 
 
 def test_multithreaded_torus_is_bit_reproducible():
-    """Two threads split the type-1 transforms by residue class of the modes: the same bits on every run."""
+    """With the near field, two threads run the transforms and the pairs at once, one thread each: the bits of one
+    thread. Four give each two: the type-1 transforms split by residue class of the modes and the pairs in blocks,
+    the same bits on every run."""
     from stipple import halftone_torus, load_density
 
     weights = load_density(IMAGE)
-    runs = [halftone_torus(weights, 3000, 160, iterations=60, tol=1e-14, threads=2).points for _ in range(3)]
+
+    def points(threads):
+        return halftone_torus(weights, 3000, 160, iterations=60, tol=1e-14, threads=threads).points
+
+    runs = [points(4) for _ in range(3)]
     assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
-    single = halftone_torus(weights, 3000, 160, iterations=60, tol=1e-14, threads=1).points
-    assert not np.array_equal(runs[0], single), "threads=2 did not take the split path"
+    single = points(1)
+    assert np.array_equal(points(2), single)
+    assert not np.array_equal(runs[0], single), "threads=4 did not take the split path"

@@ -85,3 +85,21 @@ def test_pair_blocks_match_all_pairs_and_one_block(monkeypatch, rng):
     (product,), (expected_product,) = threaded.hessian_vectors([direction]), single.hessian_vectors([direction])
     assert np.allclose(product, expected_product, rtol=1e-12, atol=1e-15 * np.abs(expected_product).max())
     assert np.array_equal(np.sort(threaded.pairs()[0]), np.sort(single.pairs()[0]))
+
+
+def test_transforms_and_pairs_at_once_give_the_bits_of_one_after_the_other():
+    """Two threads: the transforms and the pairs run at once, one thread each, and every derivative has the bits
+    of the one-thread problem, which evaluates them one after the other."""
+    single, points = threaded_problem(1)
+    both, _ = threaded_problem(2)
+    assert both.objective.concurrent and not single.objective.concurrent
+    assert [term.threads for term in both.objective.terms] == [1, 1]
+    fields = [np.random.default_rng(2).standard_normal(points.shape), points]
+    results = []
+    for problem in (single, both):
+        objective = problem.objective
+        objective.set_points(points)
+        evaluations = [objective.energy(), objective.gradient(), objective.hessian_gram(fields)]
+        results.append(evaluations + objective.hessian_vectors(fields))
+    for mine, theirs in zip(*results, strict=True):
+        np.testing.assert_array_equal(mine, theirs)

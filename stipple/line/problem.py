@@ -251,6 +251,9 @@ def line_problem(
     near_kernel = torus_near_kernel(dots.bandwidth, scale)
     steps = int(np.ceil(near_kernel.radius * subdivisions / step)) + 1
     discrepancy = dots.discrepancy
+    # The curve's near field takes the threads of the dots' (``stipple.torus.pair_share``), at once with the
+    # transforms where those have their own.
+    dots_pairs = dots.objective.terms[-1]
     near = NearField(
         near_kernel,
         discrepancy.weight,
@@ -258,7 +261,7 @@ def line_problem(
         factor=float(np.prod(scale)),
         hessian=hessian,
         exclude=curve_neighbours(nodes, steps),
-        threads=discrepancy.threads,
+        threads=dots_pairs.threads,
     )
     mu = penalty * penalty_scale(discrepancy.weight * subdivisions, n_vertices)
     speed = SpeedConstraint(step, mu, scale, hessian)
@@ -276,7 +279,12 @@ def line_problem(
     return LineProblem(
         domain="torus",
         manifold=rectangle,
-        objective=SumObjective(CurveNodes(discrepancy, subdivisions), CurveNodes(near, subdivisions), speed),
+        objective=SumObjective(
+            CurveNodes(discrepancy, subdivisions),
+            CurveNodes(near, subdivisions),
+            speed,
+            concurrent=dots.objective.concurrent,
+        ),
         discrepancy=discrepancy,
         n_points=n_vertices,
         bandwidth=dots.bandwidth,
