@@ -280,14 +280,14 @@ class NearField:
 
     def _block_gram(self, columns, block):
         """``sum_pairs (K'' - K'/r) ra rb + K'/r da . db`` of one block, for every pair of fields (``ra``: the
-        radial component ``da . (x_i - x_j) / r``)."""
+        radial component ``da . (x_i - x_j) / r``, here as ``excess`` times the two dot products)."""
         components = [self._pair_components(block, field) for field in columns]
         gram = np.empty((len(columns), len(columns)))
         for a in range(len(columns)):
             for b in range(a, len(columns)):
-                (ra, da), (rb, db) = components[a], components[b]
+                (dot_a, da), (dot_b, db) = components[a], components[b]
                 across = sum(np.einsum("i,i,i->", block.tangential, x, y) for x, y in zip(da, db, strict=True))
-                along = np.einsum("i,i,i->", block.excess, ra, rb)
+                along = np.einsum("i,i,i->", block.excess, dot_a, dot_b)
                 gram[a, b] = gram[b, a] = across + along
         return gram
 
