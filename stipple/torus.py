@@ -233,7 +233,8 @@ def torus_problem(
     derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon)
     scale = torus_scale(weights.shape)
     shape = tuple(n + 1 for n in axis_bandwidths(bandwidth, weights.shape))
-    pair_threads = pair_share(threads) if near_field else 0
+    # The GPU's transforms keep the measured path: they were never run from a second thread (no GPU to check on).
+    pair_threads = pair_share(threads) if near_field and backend != "cufinufft" else 0
     nufft = make_nufft(backend, shape, derivative_epsilon, threads - pair_threads)
     fourier = TorusFourier(nufft, analysis_epsilon=epsilon)
     objective, discrepancy = torus_objective(weights, n_points, bandwidth, fourier, hessian, near_field, pair_threads)
