@@ -181,24 +181,25 @@ class NearKernel:
         return g - q, g1 - q1, g2 - q2
 
     def pair_terms(self, distance):
-        """``(sum of K, K'/r, K'')`` at distances ``0 < r < radius``: what the pair sums need. The polynomial's
-        parts are evaluated in ``r²`` (its ``q'/r`` without a division)."""
-        a = self.coeffs
-        square = distance * distance
+        """``(sum of K, K'/r, K'')`` at distances ``0 < r < radius``: what the pair sums need (the polynomial's
+        ``q'/r`` without a division)."""
         g, g1, g2 = self.profile(distance, orders=3)
-        q = a[0] + square * (a[1] + square * (a[2] + square * (a[3] + square * a[4])))
-        q1_over_r = 2 * a[1] + square * (4 * a[2] + square * (6 * a[3] + square * (8 * a[4])))
-        q2 = 2 * a[1] + square * (12 * a[2] + square * (30 * a[3] + square * (56 * a[4])))
+        q, q1_over_r, q2 = self._polynomial_in_square(distance * distance)
         # K is a small difference of g and q (both near g(0)): summed after subtracting, not before.
         return float(np.sum(g - q)), g1 / distance - q1_over_r, g2 - q2
 
     def _polynomial(self, r):
+        """``(q, q', q'')`` at distances ``r``."""
+        value, first_over_r, second = self._polynomial_in_square(r * r)
+        return value, r * first_over_r, second
+
+    def _polynomial_in_square(self, square):
+        """``(q, q'/r, q'')`` of the even polynomial, from ``r²``."""
         a = self.coeffs
-        r2 = r * r
-        value = a[0] + r2 * (a[1] + r2 * (a[2] + r2 * (a[3] + r2 * a[4])))
-        first = r * (2 * a[1] + r2 * (4 * a[2] + r2 * (6 * a[3] + r2 * 8 * a[4])))
-        second = 2 * a[1] + r2 * (12 * a[2] + r2 * (30 * a[3] + r2 * 56 * a[4]))
-        return value, first, second
+        value = a[0] + square * (a[1] + square * (a[2] + square * (a[3] + square * a[4])))
+        first_over_r = 2 * a[1] + square * (4 * a[2] + square * (6 * a[3] + square * (8 * a[4])))
+        second = 2 * a[1] + square * (12 * a[2] + square * (30 * a[3] + square * (56 * a[4])))
+        return value, first_over_r, second
 
     def plane_coefficients(self, frequencies):
         """2-D Fourier transform ``2 pi int_0^radius K_near(r) J0(2 pi rho r) r dr`` at radial frequencies ``rho``.
