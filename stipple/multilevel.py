@@ -37,8 +37,13 @@ SMALLEST = 2000
 LEVEL_ITERATIONS = 50
 # Samples of the density per coarse cell (at least) when measuring the cells' masses.
 SAMPLES_PER_CELL = 16
-# Candidate lattice points per dot: offsets (i + 1/2, j + 1/2) half-vectors, |i|, |j| <= LATTICE_REACH.
+# Candidate lattice points per dot: offsets (i + 1/2, j + 1/2) half-vectors, |i|, |j| < LATTICE_REACH (36), more
+# for a dot with more children (a narrow peak that the coarse level's bandwidth does not resolve gives a coarse dot
+# 40-50 children: reusing a candidate put children on top of each other, which no later step separates).
 LATTICE_REACH = 3
+# The second neighbour vector must be at least this far from parallel to the first (|sine| of the angle); else
+# (dots along a line) it is the first turned by a right angle, so that the lattice's points stay distinct.
+MIN_LATTICE_SINE = 0.5
 
 
 def level_counts(n_points, ratio=RATIO, smallest=None):
@@ -110,13 +115,24 @@ def lattice_vectors(points, scale, threads=1):
     return neighbour_pair(delta)
 
 
-def neighbour_pair(delta):
+def neighbour_pair(delta, normals=None):
     """From the vectors to each dot's nearest neighbours, nearest first (``(dots, k, dim)``): the first, and the
-    one of the others whose direction is closest to a right angle to it."""
+    one of the others whose direction is closest to a right angle to it; where even that one is within
+    ``MIN_LATTICE_SINE`` of parallel, the first turned by a right angle (in the plane, or about the dots'
+    ``normals`` on a surface)."""
     first = delta[:, 0]
     length = np.linalg.norm(delta, axis=2)
     cosine = np.abs(np.einsum("ij,ikj->ik", first, delta[:, 1:])) / np.maximum(length[:, :1] * length[:, 1:], 1e-300)
-    second = delta[np.arange(len(delta)), 1 + np.argmin(cosine, axis=1)]
+    best = np.argmin(cosine, axis=1)
+    second = delta[np.arange(len(delta)), 1 + best]
+    parallel = cosine[np.arange(len(delta)), best] ** 2 > 1 - MIN_LATTICE_SINE**2
+    if parallel.any():
+        second = second.copy()
+        turned = first[parallel]
+        if normals is None:
+            second[parallel] = np.stack([-turned[:, 1], turned[:, 0]], axis=1)
+        else:
+            second[parallel] = np.cross(normals[parallel], turned)
     return first, second
 
 
@@ -132,16 +148,34 @@ def lattice_children(points, counts, scale, threads=1):
 def lattice_offsets(first, second, counts):
     """The offsets of each dot's ``counts`` children from it, nearest first, on the lattice spanned by half its
     neighbour vectors ``first`` and ``second`` shifted by a quarter of both: ``(owner, offsets)``, the children
-    of dot ``c`` consecutive, in dot order."""
-    steps = np.arange(-LATTICE_REACH, LATTICE_REACH) + 0.5
-    i, j = (grid.ravel() for grid in np.meshgrid(steps, steps))
-    # (dots, candidates, dim) offsets.
-    offsets = (i[None, :, None] * first[:, None, :] + j[None, :, None] * second[:, None, :]) / 2
-    rank = np.argsort(np.einsum("ijk,ijk->ij", offsets, offsets), axis=1, kind="stable")
+    of dot ``c`` consecutive, in dot order. Distinct lattice points for every child: a dot with more than
+    ``(2 LATTICE_REACH)²`` children takes them from a larger patch of the lattice. A dot with ``c`` > 4 children
+    shrinks its lattice by ``sqrt(c / 4)``, so that they fill about its own cell, as four children do: unshrunk
+    they reached into the neighbours' cells, and where neighbours had as many, children of two dots fell on the
+    same points (a narrow peak: a tenth of the children on top of others)."""
+    counts = np.asarray(counts, dtype=np.intp)
     owner = np.repeat(np.arange(len(first)), counts)
     within = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-    within = np.minimum(within, rank.shape[1] - 1)
-    return owner, offsets[owner, rank[owner, within]]
+    offsets = np.empty((len(owner), np.shape(first)[1]))
+    reach = np.maximum(LATTICE_REACH, np.ceil(np.sqrt(counts) / 2)).astype(np.intp)
+    for value in np.unique(reach):
+        dots = reach == value
+        candidates, rank = _nearest_lattice_points(first[dots], second[dots], value)
+        among = np.cumsum(dots) - 1  # each selected dot's row in ``candidates``
+        children = dots[owner]
+        rows = among[owner[children]]
+        offsets[children] = candidates[rows, rank[rows, within[children]]]
+    offsets /= np.sqrt(np.maximum(counts, 4) / 4)[owner, None]
+    return owner, offsets
+
+
+def _nearest_lattice_points(first, second, reach):
+    """The ``(2 reach)²`` lattice offsets ``((i + 1/2) first + (j + 1/2) second) / 2``, ``|i + 1/2|, |j + 1/2| <
+    reach``, of each dot (``(dots, candidates, dim)``) and their order by length per dot (stable)."""
+    steps = np.arange(-reach, reach) + 0.5
+    i, j = (grid.ravel() for grid in np.meshgrid(steps, steps))
+    offsets = (i[None, :, None] * first[:, None, :] + j[None, :, None] * second[:, None, :]) / 2
+    return offsets, np.argsort(np.einsum("ijk,ijk->ij", offsets, offsets), axis=1, kind="stable")
 
 
 def split_points(weights, points, n_points, scale, threads=1):
@@ -171,7 +205,7 @@ def sphere_lattice_children(points, counts, threads=1):
     _, index = cKDTree(points).query(points, k=neighbours, workers=threads)
     delta = points[index[:, 1:]] - points[:, None, :]
     delta -= np.einsum("ikj,ij->ik", delta, points)[:, :, None] * points[:, None, :]
-    owner, chosen = lattice_offsets(*neighbour_pair(delta), counts)
+    owner, chosen = lattice_offsets(*neighbour_pair(delta, normals=points), counts)
     return Sphere().retract(points[owner], chosen)
 
 

@@ -61,6 +61,9 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     def step_away(pixels, close, neighbour, distance, length):
         away = pixels[close] - pixels[neighbour]
         away -= size * np.rint(away / size)
+        on_top = distance == 0
+        away[on_top] = _directions(close[on_top])[:, :2]
+        distance = np.where(on_top, 1.0, distance)
         moved = np.mod(pixels[close] + (length / np.maximum(distance, 1e-12))[:, None] * away, size)
         moved[moved >= size] = 0.0
         return moved
@@ -87,11 +90,21 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
 
     def step_away(vectors, close, neighbour, distance, length):
         origin = vectors[close]
-        away = sphere.project(origin, origin - vectors[neighbour])
+        away = origin - vectors[neighbour]
+        on_top = distance == 0
+        away[on_top] = _directions(close[on_top])
+        away = sphere.project(origin, away)
         away /= np.maximum(np.linalg.norm(away, axis=1), 1e-300)[:, None]
         return sphere.retract(origin, length[:, None] * away)
 
     return spread_apart(np.array(points, dtype=float), spacing, nearest, step_away, target, passes)
+
+
+def _directions(indices):
+    """Unit vectors ``(cos a, sin a, 0)`` at golden-angle steps ``a`` of the dots' indices: the directions in which
+    dots on top of another dot (distance 0, no direction away from it) move, a different one for each."""
+    angles = np.asarray(indices, dtype=float) * np.pi * (3 - np.sqrt(5))
+    return np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
 
 
 def spread_apart(positions, spacing, nearest, step_away, target=None, passes=SPREAD_PASSES):

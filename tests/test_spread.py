@@ -129,6 +129,16 @@ def test_sphere_a_fibonacci_lattice_above_the_target_is_left_exactly_alone():
     assert np.array_equal(spread, points)
 
 
+def test_dots_on_top_of_each_other_are_separated():
+    """Two dots at the same point have no direction away from each other: each moves its own way (torus)."""
+    lattice = square_lattice(16)
+    points = np.vstack([lattice, lattice[100]])
+    weights = np.ones((64, 64))
+    spread, moved = spread_close(points, weights)
+    assert moved >= 2
+    assert periodic_distance(spread[100], spread[-1], np.array([64.0, 64.0])) > 0.5 * 0.78 * 4
+
+
 def test_sphere_a_close_pair_is_separated_and_dots_away_from_it_stay():
     lattice = fibonacci_lattice(2000)
     spacing = hexagonal_spacing(len(lattice) / (4 * np.pi), 1.0)
@@ -148,6 +158,15 @@ def test_sphere_a_close_pair_is_separated_and_dots_away_from_it_stay():
     assert nearest[1] > nearest[0]
     far = geodesic(points, extra) > 3 * spacing
     assert np.array_equal(spread[far], points[far])
+
+
+def test_sphere_dots_on_top_of_each_other_are_separated():
+    lattice = fibonacci_lattice(2000)
+    points = np.vstack([lattice, lattice[700]])
+    spacing = hexagonal_spacing(len(lattice) / (4 * np.pi), 1.0)
+    spread, _ = spread_close_sphere(points, uniform_local_density(len(points)), target=0.5)
+    assert np.allclose(np.linalg.norm(spread, axis=1), 1.0, atol=1e-14)
+    assert geodesic(spread[700], spread[-1]) > 0.2 * spacing
 
 
 def test_sphere_moves_are_bounded_and_empty_cells_keep_their_dots(rng):
