@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 import stipple
 from stipple.colour import halftone_colour, separate
 from stipple.errors import StippleError
+from stipple.render.dots import periodic_tone_dots
 from stipple.tone import (
     fit_inside,
     ink_ratio,
@@ -23,6 +24,7 @@ from stipple.tone import (
     union_coverage,
     union_coverage_image,
 )
+from stipple.tone.wrap import wrapped_copies
 
 
 def covered(centres, radii, points):
@@ -131,6 +133,63 @@ def test_constant_darkness_is_drawn_at_its_coverage(blue_noise, points, darkness
         assert drawn.mean() > 0.997  # black comes out black
     else:
         assert abs(drawn.mean() - darkness) < 0.01
+
+
+def ring(image, k):
+    """Mean of the pixels ``k`` pixels in from the image's edges (k = 0: the outermost rows and columns)."""
+    return np.r_[image[k], image[-1 - k], image[:, k], image[:, -1 - k]].mean()
+
+
+@pytest.mark.parametrize("darkness", [0.2, 0.5, 0.9])
+def test_a_periodic_canvas_draws_a_torus_picture_without_a_frame(blue_noise, darkness):
+    """The torus's dots of a constant density, drawn with their copies across the edges at the radii of the
+    periodic canvas: the pixels along the edges have the interior's coverage. On the picture's own canvas with
+    the edge dots moved in (``fit_inside``), a dark tone's outermost pixels come out light and the next dark."""
+    size = (48.0, 48.0)
+    centres = blue_noise * size
+    radii = tone_radii(centres, np.full((24, 24), darkness), size, periodic=True)
+    copies, origin = wrapped_copies(centres, size, radii.max())
+    drawn = oracle_image(copies, radii[origin], size, (48, 48), per_pixel=6)
+    assert all(abs(ring(drawn, k) - darkness) < 0.015 for k in range(3))
+    assert abs(interior(drawn, 4).mean() - darkness) < 0.01
+    if darkness == 0.9:
+        flat = tone_radii(centres, np.full((24, 24), darkness), size)
+        [(moved, flat)], _ = fit_inside([(centres, flat)], size)
+        framed = oracle_image(moved, flat, size, (48, 48), per_pixel=6)
+        assert ring(framed, 0) < darkness - 0.05 and ring(framed, 1) > darkness + 0.03
+
+
+def test_periodic_radii_leave_the_interior_as_the_plain_canvas_does(blue_noise, rng):
+    """The periodic canvas only adds copies beyond the edges: far from them the radii are the plain canvas's."""
+    size = (48.0, 48.0)
+    centres = blue_noise * size
+    darkness = gaussian_filter(rng.random((24, 24)), 2, mode="wrap")
+    periodic = tone_radii(centres, darkness, size, periodic=True)
+    plain = tone_radii(centres, darkness, size)
+    inner = np.all((centres > 12) & (centres < 36), axis=1)
+    assert np.allclose(periodic[inner], plain[inner], rtol=0.02)
+
+
+def test_periodic_tone_dots_draw_each_dot_across_the_edges_where_the_picture_wants_ink(blue_noise):
+    """One disc per dot where it was placed, at its radius, and a copy of every disc that reaches across an edge
+    (for raster pictures); on a page whose left tenth is black and the rest white, a dot just left of the right
+    edge (on the torus, next to the black bar) is drawn across the edge, in the bar, not alone on the white."""
+    size = (48.0, 48.0)
+    centres = blue_noise * size
+    (dots,) = periodic_tone_dots([("dots", (0, 0, 0), centres)], size, [np.full((48, 48), 0.5)])
+    radii = tone_radii(centres, np.full((48, 48), 0.5), size, periodic=True)
+    assert np.array_equal(dots.centres, centres) and np.allclose(dots.radii, radii)
+    copies, origin = wrapped_copies(centres, size, radii.max())
+    reaching = np.all((copies + radii[origin, None] > 0) & (copies - radii[origin, None] < size), axis=1)
+    reaching[: len(centres)] = False
+    assert len(dots.copies[0]) == reaching.sum() > 0
+    assert np.allclose(np.sort(dots.copies[1]), np.sort(radii[origin][reaching]))
+    coverage = np.zeros((48, 48))
+    coverage[:, :5] = 1.0
+    stray = np.array([[47.9, 24.0]])
+    (bar,) = periodic_tone_dots([("dots", (0, 0, 0), np.vstack([centres, stray]))], size, [coverage])
+    assert np.allclose(bar.centres[-1], stray - [48.0, 0.0])
+    assert not np.any(np.all(np.isclose(bar.copies[0], stray), axis=1))
 
 
 def test_ramp_keeps_every_tenth_of_the_tone_curve():

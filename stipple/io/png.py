@@ -174,8 +174,12 @@ def _draw_layer(draw, dots, scale, pen_width, fill):
     elif dots.squash is None:
         # Pillow's box holds the indices of the first and last pixel covered: c -+ (r - 1/2) in pixel-centre
         # coordinates, so that the disc covers about pi r^2 fine pixels (c -+ r drew it a pixel too wide); a dot
-        # smaller than a fine pixel is drawn as 2 x 2 of them.
-        for (x, y), radius in zip(np.asarray(dots.centres) * scale, np.maximum(dots.radii * scale, 1.0), strict=True):
+        # smaller than a fine pixel is drawn as 2 x 2 of them. The discs' copies across a wrapping page's edges
+        # are drawn as well.
+        centres, radii = dots.centres, dots.radii
+        if dots.copies is not None:
+            centres, radii = np.concatenate([centres, dots.copies[0]]), np.concatenate([radii, dots.copies[1]])
+        for (x, y), radius in zip(np.asarray(centres) * scale, np.maximum(radii * scale, 1.0), strict=True):
             draw.ellipse((x - radius, y - radius, x + radius - 1, y + radius - 1), fill=fill)
     else:
         for centre, radius, squash, angle in zip(

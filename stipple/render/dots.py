@@ -9,12 +9,17 @@ apart, and two dots ``i, j`` never touch, since ``r_i + r_j <= 0.9 max(d_i, d_j)
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..tone import fit_inside, tone_radii_layers
+from ..tone.wrap import wrapped_copies
 
 TOUCH_FRACTION = 0.45
 MIN_SQUASH = 0.02
+# A copy of a dot across a periodic picture's edge is not drawn where the picture wants less than this share of
+# the ink that its other copies' places want (``wanted_copies``).
+UNWANTED_SHARE = 0.25
 
 
 @dataclass
@@ -23,6 +28,8 @@ class Dots:
 
     ``radii`` are per dot; a foreshortened dot is an ellipse whose axis along ``angle`` (radians, canvas
     coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.render.pen``), if any.
+    ``copies``, ``(centres, radii)``: on a page that wraps around (a torus's tone picture), the discs' copies
+    across its edges, which a PNG draws too; an SVG has one circle per dot, cut by its page.
     """
 
     name: str
@@ -32,6 +39,7 @@ class Dots:
     squash: np.ndarray | None = None
     angle: np.ndarray | None = None
     paths: list | None = None
+    copies: tuple | None = None
 
 
 def nearest_distances(points):
@@ -76,7 +84,7 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None):
     ]
 
 
-def tone_dots(layers, size, coverages, *, target=None):
+def tone_dots(layers, size, coverages, *, target=None, periodic=False):
     """Tone-true ``Dots``: radii (``stipple.tone``) that make the drawn ink reproduce ``coverages``.
 
     Parameters
@@ -90,15 +98,62 @@ def tone_dots(layers, size, coverages, *, target=None):
     target : numpy.ndarray, optional
         ``(H, W, 3)`` colour the inks, multiplied on white paper, must print; then the inks are corrected
         together against the drawn colour (``stipple.tone.tone_radii_layers``), otherwise each alone.
-
-    Dots that would cross the canvas's edge move inwards just enough (``fit_inside``, "clamp"): the picture
-    stays registered with the image.
+    periodic : bool
+        The canvas wraps around, as the torus the dots were placed on (``periodic_tone_dots``). Otherwise dots
+        that would cross the canvas's edge move inwards just enough (``fit_inside``, "clamp"): the picture stays
+        registered with the image.
     """
+    if periodic:
+        return periodic_tone_dots(layers, size, coverages, target=target)
     pairs = [(centres, coverage) for (_, _, centres), coverage in zip(layers, coverages, strict=True)]
     colours = None if target is None else [colour for _, colour, _ in layers]
     radii = tone_radii_layers(pairs, size, colours=colours, target=target)
     placed, _ = fit_inside([(c, r) for (c, _), r in zip(pairs, radii, strict=True)], size, how="clamp")
     return [Dots(name, colour, c, r) for (name, colour, _), (c, r) in zip(layers, placed, strict=True)]
+
+
+def periodic_tone_dots(layers, size, coverages, *, target=None):
+    """``tone_dots`` on a canvas that wraps around, as the torus does: a picture without a frame along its edges.
+
+    The radii are those the dots need with the dots across each edge as neighbours (``tone_radii_layers(...,
+    periodic=True)``), and a dot whose disc crosses an edge is drawn across the opposite one too, each part cut
+    by the canvas, where the picture wants ink there (``wanted_copies``). Moving edge dots inwards instead left
+    the outermost pixels light and the next ones dark (a dark photo's top row 0.54 for 0.33, the next two 0.16).
+    """
+    pairs = [(centres, coverage) for (_, _, centres), coverage in zip(layers, coverages, strict=True)]
+    colours = None if target is None else [colour for _, colour, _ in layers]
+    radii = tone_radii_layers(pairs, size, colours=colours, target=target, periodic=True)
+    dots = []
+    for (name, colour, centres), coverage, own in zip(layers, coverages, radii, strict=True):
+        placed, origin = wrapped_copies(centres, size, float(own.max()) if len(own) else 0.0)
+        radius = own[origin]
+        drawn = np.all((placed + radius[:, None] > 0) & (placed - radius[:, None] < size), axis=1)
+        drawn &= wanted_copies(placed, origin, coverage, size)
+        home = np.arange(len(centres))
+        elsewhere = np.flatnonzero(drawn & ~drawn[origin] & (np.arange(len(origin)) >= len(centres)))
+        dots_moved, first = np.unique(origin[elsewhere], return_index=True)
+        home[dots_moved] = elsewhere[first]  # a dot not wanted where it is, drawn at a copy that is
+        drawn[home] = False
+        dots.append(Dots(name, colour, placed[home], own, copies=(placed[drawn], radius[drawn])))
+    return dots
+
+
+def wanted_copies(placed, origin, coverage, size):
+    """Which copies of the dots the picture wants: all but those where the coverage near the copy (the mean of
+    the 3 x 3 pixels around its nearest pixel on the canvas) is below ``UNWANTED_SHARE`` of the most that any
+    copy of the same dot has. Across an edge between a dark side and a nearly white one (a black bar along one
+    edge of a white page) a dot is drawn on the dark side only: its copy on the white side would be a sliver of
+    ink on white, and a dot that the run left just across the edge from the dark region (on the torus it belongs
+    to it) is drawn there instead of alone on white. (At half, copies were dropped along a photo's edges too,
+    which came out lighter: 2:1 panorama, sigma 2 px RMSE 0.0160 against 0.0154 with every copy.)"""
+    rows, columns = np.shape(coverage)
+    width, height = size
+    column = np.clip((placed[:, 0] * columns / width).astype(np.int64), 0, columns - 1)
+    row = np.clip((placed[:, 1] * rows / height).astype(np.int64), 0, rows - 1)
+    wants = ndimage.uniform_filter(np.asarray(coverage, dtype=float), 3, mode="nearest")[row, column]
+    most = np.zeros(len(origin) and int(origin.max()) + 1)
+    np.maximum.at(most, origin, wants)
+    return wants >= UNWANTED_SHARE * most[origin]
 
 
 def angular_distances(points):

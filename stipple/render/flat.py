@@ -42,7 +42,8 @@ def layered_drawing(
 
     ``style`` "tone" (given ``coverages``, each ink's target coverage (H, W), and filled discs): each dot's
     radius makes the drawn ink reproduce its coverage, darks included (``stipple.render.dots.tone_dots``; with
-    ``target``, the (H, W, 3) colour the inks multiplied on white must print); dots crossing the edge move in.
+    ``target``, the (H, W, 3) colour the inks multiplied on white must print); the canvas wraps around as the torus
+    does, a dot crossing an edge drawn across the opposite one too (``periodic_tone_dots``).
     "plotter": the radius that makes the dots' ink equal ``ink`` (the density's mean; 0.5 if unknown), capped
     at 0.45 × the distance to the nearest dot of any layer, so no two dots touch, and the drawing inset by the
     largest radius (``stipple.render.dots.flat_dots``). ``dot_radius`` (physical ``(value, unit)``) fixes every
@@ -56,7 +57,7 @@ def layered_drawing(
     placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
     radius, stroke, pen = drawn_sizes(width, columns, dot_radius, dot_style, pen_width)
     if style == "tone" and coverages is not None and radius is None and dot_style == "disc":
-        drawn = tone_dots(placed, (columns, rows), coverages, target=target)
+        drawn = tone_dots(placed, (columns, rows), coverages, target=target, periodic=True)
         notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii"]
     else:
         tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))

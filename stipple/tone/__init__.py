@@ -33,11 +33,14 @@ print the image's colour when the inks are laid independently of each other (for
 alone, ``c = 1 - R``, exactly, however the dots overlap). Dots of a joint stipple are neither apart nor
 independent, so ``tone_radii_layers`` with the inks' colours corrects against the drawn colour itself.
 
-``fit_inside`` keeps every dot on the canvas without moving the others (``stipple.render.dots.inset`` shrinks the
-whole drawing, a misregistration of up to one radius that a blurred comparison counts as tone error).
+A torus's picture wraps around (``periodic``, ``stipple.tone.wrap``): its dots near an edge have neighbours and
+ink across the opposite edge. ``fit_inside`` keeps every dot of a picture that does not wrap on the canvas without
+moving the others (``stipple.render.dots.inset`` shrinks the whole drawing, a misregistration of up to one radius
+that a blurred comparison counts as tone error).
 
 Modules: ``radii`` (the radii and ``fit_inside``), ``raster`` (exact drawing of discs), ``inks`` (separations
-for multiplying inks), ``checks`` (argument checks). The library uses numpy, scipy and Pillow only.
+for multiplying inks), ``wrap`` (the periodic canvas), ``checks`` (argument checks). The library uses numpy,
+scipy and Pillow only.
 """
 
 from .inks import INK_COLOURS, multiply_colour, multiply_separation

@@ -9,6 +9,7 @@ from ..errors import StippleError
 from .checks import check_colours, check_darkness, check_discs, check_options, check_size
 from .inks import multiply_colour
 from .raster import MAX_GRID_PIXELS, union_coverage_image
+from .wrap import Canvas
 
 SATURATION = 9.55
 FULL = 0.999
@@ -69,6 +70,7 @@ def tone_radii(
     max_radius=None,
     max_ratio=1.0,
     samples_per_dot=SAMPLES_PER_DOT,
+    periodic=False,
 ):
     """Radii that make the union of the discs cover the darkness of the image: dark regions come out dark.
 
@@ -92,6 +94,10 @@ def tone_radii(
         neighbour's centre, enough to fill black (blue noise fills the paper at about 0.7).
     samples_per_dot : int
         Analysis grid pixels per dot on average (4 to 1024); the cost grows with it.
+    periodic : bool
+        The canvas wraps around, as the torus the dots were placed on: the dots across each edge are the
+        neighbours of the dots near it, and their discs (drawn across the edge too) ink the strip between
+        them (``stipple.tone.wrap``).
 
     Returns
     -------
@@ -110,10 +116,11 @@ def tone_radii(
     if len(centres) == 0:
         return np.zeros(0)
     grid = _grid(size, len(centres), samples_per_dot)
-    ink = _Ink(centres, size, grid, _resample(darkness, grid), bounds)
+    canvas = Canvas.around(size, grid, periodic, len(centres))
+    ink = _Ink(canvas.place(centres), canvas.size, canvas.grid, canvas.widen(_resample(darkness, grid)), bounds)
     for _ in range(passes):
         ink.correct(ink.target)
-    return ink.final()
+    return ink.final()[: len(centres)]
 
 
 def tone_radii_layers(
@@ -128,6 +135,7 @@ def tone_radii_layers(
     max_ratio=1.0,
     max_ratio_any=2.0,
     samples_per_dot=SAMPLES_PER_DOT,
+    periodic=False,
 ):
     """Tone-true radii for several inks: alone, or printed over each other with multiply blending.
 
@@ -149,7 +157,7 @@ def tone_radii_layers(
         Correction passes, as for ``tone_radii``; default 4 for inks alone, ``COLOUR_PASSES`` (6) with
         ``colours``: the joint correction converges more slowly where one ink shows only between another's
         dots (a dark blue drawn with black, cyan and magenta reached 0.84 of its chroma after 4, 0.855 after 6).
-    min_radius, max_radius, max_ratio, samples_per_dot :
+    min_radius, max_radius, max_ratio, samples_per_dot, periodic :
         As for ``tone_radii``; ``max_ratio`` applies to each ink's own spacing.
     max_ratio_any : float
         With ``colours``: largest radius over the distance to the nearest dot of any ink, in (0, 10]. A sparse
@@ -178,7 +186,7 @@ def tone_radii_layers(
     if passes is None:
         passes = 4 if colours is None else COLOUR_PASSES
     if colours is None:
-        options = dict(min_radius=min_radius, max_radius=max_radius, max_ratio=max_ratio)
+        options = dict(min_radius=min_radius, max_radius=max_radius, max_ratio=max_ratio, periodic=periodic)
         return [tone_radii(c, a, size, passes=passes, samples_per_dot=samples_per_dot, **options) for c, a in layers]
     size = check_size(size)
     passes, samples_per_dot, bounds = check_options(passes, samples_per_dot, min_radius, max_radius, max_ratio)
@@ -202,18 +210,25 @@ def tone_radii_layers(
     if total == 0:
         return [np.zeros(0) for _ in checked]
     grid = _grid(size, total, samples_per_dot)
-    inks = [_Ink(c, size, grid, _resample(a, grid), bounds) if len(c) else None for c, a in checked]
+    canvas = Canvas.around(size, grid, periodic, min(len(c) for c, _ in checked if len(c)))
+    placed = [canvas.place(c) for c, _ in checked]
+    inks = [
+        _Ink(p, canvas.size, canvas.grid, canvas.widen(_resample(a, grid)), bounds) if len(c) else None
+        for p, (c, a) in zip(placed, checked, strict=True)
+    ]
     if total > 1:
-        everything = np.concatenate([c for c, _ in checked])
-        for ink, (c, _) in zip(inks, checked, strict=True):
+        everything = np.concatenate(placed)
+        for ink, p in zip(inks, placed, strict=True):
             if ink is not None:
-                nearest = nearest_elsewhere(c, everything)
+                nearest = nearest_elsewhere(p, everything)
                 ink.cap = np.maximum(np.minimum(ink.cap, max_ratio_any * nearest), ink.min_radius)
                 ink.floor = np.minimum(ink.floor, ink.cap)
                 ink.radii = ink.bounded(ink.radii)
-    drawn = [ink.draw() if ink else np.zeros(grid, np.float32) for ink in inks]
+    drawn = [ink.draw() if ink else np.zeros(canvas.grid, np.float32) for ink in inks]
     channels = [np.flatnonzero(a > 0) for a in absorb]
-    goal = {ch: _resample(target[..., ch], grid).astype(np.float32) for ch in set().union(*map(set, channels))}
+    goal = {
+        ch: canvas.widen(_resample(target[..., ch], grid)).astype(np.float32) for ch in set().union(*map(set, channels))
+    }
     goals = [{ch: ink.mean(goal[ch]) for ch in chans} if ink else {} for ink, chans in zip(inks, channels, strict=True)]
     for _ in range(passes):
         for k, ink in enumerate(inks):
@@ -221,7 +236,7 @@ def tone_radii_layers(
                 continue
             step, norm = np.zeros(len(ink.count)), np.zeros(len(ink.count))
             for ch in channels[k]:
-                others = np.ones(grid, np.float32)
+                others = np.ones(canvas.grid, np.float32)
                 for j, image in enumerate(drawn):
                     if j != k and absorb[j, ch] > 0:
                         others *= 1.0 - np.float32(absorb[j, ch]) * image
@@ -231,7 +246,7 @@ def tone_radii_layers(
                 norm += slope * slope
             ink.correct(np.clip(ink.covered + step / (norm + REGULARISATION), 0.0, 1.0))
             drawn[k] = ink.draw()
-    return [ink.final() if ink else np.zeros(0) for ink in inks]
+    return [ink.final()[: len(c)] if ink else np.zeros(0) for ink, (c, _) in zip(inks, checked, strict=True)]
 
 
 def fit_inside(layers, size, *, how="clamp", margin=None):

@@ -1,0 +1,69 @@
+"""The canvas the radii are found on: the picture's own, or one that wraps around as the torus does.
+
+A torus's dots near an edge have neighbours across the opposite edge, which fill the strip between them and
+the edge. On the picture's own canvas that strip has only the near dots' discs, and their cells reach the edge:
+the correction grows them to darken the strip, and the outermost pixels come out light and the next ones dark.
+A periodic canvas is the picture widened by whole cells of the analysis grid on every side, the darkness there
+wrapped around and the dots copied from across the edges, so that every dot's cell, neighbours and drawn ink
+are those of the torus (``stipple.render.dots.periodic_tone_dots`` draws the copies too).
+"""
+
+import numpy as np
+
+# The periodic canvas reaches this many mean dot spacings (of the sparsest ink) beyond every edge: further than
+# the cell of a dot in a region a ninth as dense as the mean.
+WRAP_SPACINGS = 3
+
+
+class Canvas:
+    """The analysis canvas of a picture of ``size`` on the analysis ``grid``, ``margin`` grid cells ``(rows,
+    columns)`` wider on every side (0: the picture's own canvas)."""
+
+    def __init__(self, size, grid, margin=(0, 0)):
+        self.picture_size = np.asarray(size, dtype=float)
+        self.margin = tuple(int(m) for m in margin)
+        rows, columns = grid
+        cell = self.picture_size / np.array([columns, rows])
+        self.offset = cell * np.array([self.margin[1], self.margin[0]])
+        self.size = tuple(self.picture_size + 2 * self.offset)
+        self.grid = (rows + 2 * self.margin[0], columns + 2 * self.margin[1])
+
+    @classmethod
+    def around(cls, size, grid, periodic, fewest):
+        """The picture's canvas, or (``periodic``) the one that wraps ``WRAP_SPACINGS`` spacings of ``fewest``
+        dots around it, at most the grid's own size."""
+        if not periodic:
+            return cls(size, grid)
+        width, height = size
+        spacing = np.sqrt(width * height / max(fewest, 1))
+        rows, columns = grid
+        margin = (
+            min(rows, int(np.ceil(WRAP_SPACINGS * spacing * rows / height))),
+            min(columns, int(np.ceil(WRAP_SPACINGS * spacing * columns / width))),
+        )
+        return cls(size, grid, margin)
+
+    def widen(self, image):
+        """An image on the picture's analysis grid, ``(rows, columns[, channels])``, wrapped into the margins."""
+        pads = ((self.margin[0],) * 2, (self.margin[1],) * 2) + ((0, 0),) * (np.ndim(image) - 2)
+        return np.pad(image, pads, mode="wrap")
+
+    def place(self, centres):
+        """The dots (picture units) and their copies across the edges that lie in the margins, in this canvas's
+        units: the dots themselves first."""
+        positions, _ = wrapped_copies(centres, self.picture_size, self.offset)
+        return positions + self.offset
+
+
+def wrapped_copies(centres, size, margin):
+    """The dots and their copies across the edges of a ``size`` canvas that lie within ``margin`` (per axis) of
+    it: ``(positions, origin)``, the dots themselves first, ``origin`` the index of the dot each one copies."""
+    centres = np.asarray(centres, dtype=float).reshape(-1, 2)
+    extent = np.asarray(size, dtype=float)
+    positions, origin = [centres], [np.arange(len(centres))]
+    for shift in ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)):
+        moved = centres + np.array(shift) * extent
+        near = np.all((moved >= -margin) & (moved < extent + margin), axis=1)
+        positions.append(moved[near])
+        origin.append(np.flatnonzero(near))
+    return np.concatenate(positions), np.concatenate(origin)
