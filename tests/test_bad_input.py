@@ -86,7 +86,7 @@ def test_truncated_npy(files):
         (np.ones((3, 4, 5)), "expected a 2-D map"),
         (np.ones(7), "expected a 2-D map"),
         (np.ones((1, 1)), "at least 2×2"),
-        (np.full((5, 5), 3.0), "map is constant"),
+        (np.full((5, 5), 3.0), "map is constant (3); nothing to rescale (give --range LO HI"),
         (np.zeros((5, 5)), "map is constant"),
         (np.array([["a", "b"], ["c", "d"]]), "must hold real numbers"),
     ],

@@ -91,7 +91,8 @@ def tone_hints(weights, options):
     import numpy as np
 
     low, high = np.percentile(weights, [0.5, 99.5])
-    if high - low < FAINT_SPAN:
+    # A page of one gray with small marks (the same value at both percentiles) has nothing for --levels auto.
+    if low < high and high - low < FAINT_SPAN:
         click.echo(
             f"stipple: note: the image's gray values span only {high - low:.0%} of the range; drawn as they are "
             "(--levels auto stretches them to black and white: docs/picture.md)",

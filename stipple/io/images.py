@@ -155,7 +155,10 @@ def rescale(values, value_range=None, name="input"):
     else:
         low, high = values.min(), values.max()
         if not high > low:
-            raise StippleError(f"{name}: map is constant ({low:g}); nothing to rescale (give a range)")
+            raise StippleError(
+                f"{name}: map is constant ({low:g}); nothing to rescale (give --range LO HI, or --uniform on the "
+                "sphere for a constant density)"
+            )
     # Halving first keeps high - low finite for values near the float64 limits.
     return np.clip((values / 2 - low / 2) / (high / 2 - low / 2), 0.0, 1.0)
 
