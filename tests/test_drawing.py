@@ -44,6 +44,24 @@ def test_plotter_style_leaves_neighbours_apart_on_the_portrait(tmp_path):
     assert inside.all()
 
 
+def test_a_dot_across_the_edge_from_a_black_bar_is_drawn_in_the_bar_in_both_styles(tmp_path):
+    """On the torus a dot just left of the right edge may belong to a black bar along the left edge: on a white
+    right edge it would stand alone (the plotter style drew it whole on the paper's white margin)."""
+    page = np.full((40, 60), 255, dtype=np.uint8)
+    page[:, :6] = 0
+    Image.fromarray(page).save(tmp_path / "bar.png")
+    bar = np.column_stack([np.repeat((np.arange(4) + 0.5) * 1.5, 20), np.tile((np.arange(20) + 0.5) * 2, 4)])
+    stray = [59.95, 21.0]
+    with open(tmp_path / "dots.csv", "w") as table:
+        table.write("x,y\n" + "".join(f"{x},{y}\n" for x, y in [*bar, stray]))
+    for style in ("plotter", "tone"):
+        svg = tmp_path / f"{style}.svg"
+        run(["render", tmp_path / "dots.csv", "--like", tmp_path / "bar.png", "--style", style, "-o", svg])
+        table = circles(svg)
+        assert len(table) == len(bar) + 1
+        assert not np.any(table[:, 0] > 30), style  # nothing on the white half
+
+
 def test_uniform_sphere_is_not_a_black_disc(tmp_path):
     outputs = ["-o", tmp_path / "map.svg", "-o", tmp_path / "globe.png"]
     run(["sphere", "--uniform", "-M", 2000, "--iterations", 15, "--projection", "equirect", "-q", *outputs])

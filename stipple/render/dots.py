@@ -127,15 +127,32 @@ def periodic_tone_dots(layers, size, coverages, *, target=None):
     for (name, colour, centres), coverage, own in zip(layers, coverages, radii, strict=True):
         placed, origin = wrapped_copies(centres, size, float(own.max()) if len(own) else 0.0)
         radius = own[origin]
-        drawn = np.all((placed + radius[:, None] > 0) & (placed - radius[:, None] < size), axis=1)
-        drawn &= wanted_copies(placed, origin, coverage, size)
-        home = np.arange(len(centres))
-        elsewhere = np.flatnonzero(drawn & ~drawn[origin] & (np.arange(len(origin)) >= len(centres)))
-        dots_moved, first = np.unique(origin[elsewhere], return_index=True)
-        home[dots_moved] = elsewhere[first]  # a dot not wanted where it is, drawn at a copy that is
+        wanted = wanted_copies(placed, origin, coverage, size)
+        home = home_indices(origin, wanted, len(centres))
+        drawn = wanted & np.all((placed + radius[:, None] > 0) & (placed - radius[:, None] < size), axis=1)
         drawn[home] = False
         dots.append(Dots(name, colour, placed[home], own, copies=(placed[drawn], radius[drawn])))
     return dots
+
+
+def home_positions(centres, coverage, size, reach):
+    """Each dot where the picture wants its ink: where it is, or, for a dot within ``reach`` of an edge whose
+    place wants less than ``UNWANTED_SHARE`` of the ink that its place across the edge wants, there (on the torus
+    a dot just across the edge from a dark region belongs to it), kept on the canvas. For drawings whose dots
+    stay whole (the plotter style): no lone dot on a white edge across from a black one."""
+    placed, origin = wrapped_copies(centres, size, reach)
+    home = placed[home_indices(origin, wanted_copies(placed, origin, coverage, size), len(centres))]
+    return np.clip(home, 0.0, size)
+
+
+def home_indices(origin, wanted, count):
+    """Per dot, the index of the copy (``wrapped_copies``' order, the ``count`` dots first) it is drawn at: itself
+    where ``wanted``, else its first copy that is."""
+    home = np.arange(count)
+    elsewhere = np.flatnonzero(wanted & ~wanted[origin] & (np.arange(len(origin)) >= count))
+    moved, first = np.unique(origin[elsewhere], return_index=True)
+    home[moved] = elsewhere[first]
+    return home
 
 
 def wanted_copies(placed, origin, coverage, size):

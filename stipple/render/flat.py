@@ -5,7 +5,7 @@ import numpy as np
 
 from ..io.png import default_png_width
 from ..io.units import BLACK, WHITE, to_user_units
-from .dots import flat_dots, ink_radius, squash_paths, tone_dots
+from .dots import flat_dots, home_positions, ink_radius, squash_paths, tone_dots
 from .drawing import Drawing
 from .pen import dot_paths
 
@@ -61,6 +61,12 @@ def layered_drawing(
         notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii"]
     else:
         tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
+        if coverages is not None:
+            reach = 2 * (tone if radius is None else radius)
+            placed = [
+                (name, colour, home_positions(centres, coverage, (columns, rows), reach))
+                for (name, colour, centres), coverage in zip(placed, coverages, strict=True)
+            ]
         drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
         drawn = with_pen_paths(drawn, dot_style, pen)
         margin = _margin(drawn, stroke)
