@@ -4,6 +4,7 @@ ink's discs (``union_coverage_image``) and for inks multiplied on paper (``multi
 import numpy as np
 
 from ..errors import StippleError
+from ..io.raster import draw_discs as _draw_discs
 from .checks import check_colours, check_discs, check_size
 
 SUPERSAMPLE = 4
@@ -119,49 +120,3 @@ def _reduce(values, rows, columns, s):
         return values.astype(np.float32)
     strips = values.reshape(rows, s, columns * s).sum(axis=1, dtype=np.uint16 if s * 255 < 65536 else np.uint32)
     return strips.reshape(rows, columns, s).sum(axis=2, dtype=np.uint32).astype(np.float32)
-
-
-def _draw_discs(shape, centres, radii, scale):
-    """A boolean image of ``shape`` whose pixels have their centres inside a disc; ``centres`` in pixels,
-    ``radii`` in canvas units, ``scale`` = pixels per canvas unit in x and y.
-
-    Scanlines: each disc adds +1 where its span starts on a row and -1 after it ends; the running sum along the
-    row counts the discs over each pixel.
-    """
-    rows, columns = shape
-    sx, sy = scale
-    starts, stops = [], []
-    reach = np.ceil(radii * sy).astype(np.int64)
-    base = np.floor(centres[:, 1]).astype(np.int64)
-    for k in np.unique(reach):
-        chosen = np.flatnonzero(reach == k)
-        offsets = np.arange(-k - 1, k + 2)
-        step = max(1, (1 << 21) // len(offsets))
-        for start in range(0, len(chosen), step):
-            part = chosen[start : start + step]
-            row = base[part, None] + offsets
-            dy = (row + 0.5 - centres[part, 1:]) / sy
-            half = radii[part, None] ** 2 - dy * dy
-            keep = (half > 0) & (row >= 0) & (row < rows)
-            half = np.sqrt(np.where(keep, half, 0.0)) * sx
-            x = np.broadcast_to(centres[part, :1], half.shape)
-            first = np.floor(x - half - 0.5).astype(np.int64) + 1
-            last = np.ceil(x + half - 0.5).astype(np.int64) - 1
-            first, last = np.maximum(first, 0), np.minimum(last, columns - 1)
-            keep &= first <= last
-            line = row[keep] * (columns + 1)
-            starts.append(line + first[keep])
-            stops.append(line + last[keep] + 1)
-    size = rows * (columns + 1)
-    ends = np.zeros(size, dtype=np.int32)
-    for marks, sign in ((starts, 1), (stops, -1)):
-        if not marks:
-            continue
-        marks = np.concatenate(marks)
-        if size <= 1 << 22:
-            ends += sign * np.bincount(marks, minlength=size).astype(np.int32)
-        else:  # a large canvas: counting the marked pixels only is cheaper than a canvas-sized count
-            index, counts = np.unique(marks, return_counts=True)
-            ends[index] += sign * counts.astype(np.int32)
-    covered = np.cumsum(ends.reshape(rows, columns + 1), axis=1, dtype=np.int32)[:, :columns] > 0
-    return covered
