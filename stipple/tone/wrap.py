@@ -1,8 +1,8 @@
 """The canvas the radii are found on: the picture's own, or one that wraps around as the torus does.
 
 A torus's dots near an edge have neighbours across the opposite edge, which fill the strip between them and
-the edge. On the picture's own canvas that strip has only the near dots' discs, and their cells reach the edge:
-the correction grows them to darken the strip, and the outermost pixels come out light and the next ones dark.
+the edge. On the picture's own canvas that strip has only the near dots' discs: moved in so as not to cross the
+edge (as the tone style once did), they left the outermost pixels light and the next ones dark.
 A periodic canvas is the picture widened by whole cells of the analysis grid on every side, the darkness there
 wrapped around and the dots copied from across the edges, so that every dot's cell, neighbours and drawn ink
 are those of the torus (``stipple.render.dots.periodic_tone_dots`` draws the copies too).
