@@ -50,7 +50,9 @@ class Canvas:
 
     def place(self, centres):
         """The dots (picture units) and their copies across the edges that lie in the margins, in this canvas's
-        units: the dots themselves first."""
+        units: the dots themselves first (alone on the picture's own canvas)."""
+        if not any(self.margin):
+            return np.asarray(centres, dtype=float).reshape(-1, 2)
         positions, _ = wrapped_copies(centres, self.picture_size, self.offset)
         return positions + self.offset
 
