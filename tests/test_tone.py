@@ -192,6 +192,25 @@ def test_periodic_tone_dots_draw_each_dot_across_the_edges_where_the_picture_wan
     assert not np.any(np.all(np.isclose(bar.copies[0], stray), axis=1))
 
 
+def test_a_small_dark_mark_on_a_light_page_is_drawn_dark(rng):
+    """A 6-pixel mark of darkness 0.95 on a page of 0.03: its dots are 30 times as dense as the page's, and a grid
+    of the average's pixels per dot measured them a pixel each (its core came out 0.83 dark)."""
+    size = (120.0, 90.0)
+    y, x = np.mgrid[0:90, 0:120] + 0.5
+    inside = np.hypot(x - 60, y - 45) <= 6
+    darkness = np.where(inside, 0.95, 0.03)
+    page = hexagonal(size, 5.6, jitter=0.2, rng=rng)
+    page = page[np.hypot(page[:, 0] - 60, page[:, 1] - 45) > 7]
+    mark = hexagonal((14.0, 14.0), 1.08, jitter=0.2, rng=rng) + [53.0, 38.0]
+    mark = mark[np.hypot(mark[:, 0] - 60, mark[:, 1] - 45) <= 6]
+    centres = np.vstack([page, mark])
+    radii = tone_radii(centres, darkness, size)
+    drawn = oracle_image(centres, radii, size, (90, 120), per_pixel=6)
+    core = np.hypot(x - 60, y - 45) <= 4
+    assert drawn[core].mean() > 0.92
+    assert abs(drawn[np.hypot(x - 60, y - 45) > 12].mean() - 0.03) < 0.01
+
+
 def test_ramp_keeps_every_tenth_of_the_tone_curve():
     columns, rows = 128, 48
     ramp = 1.0 - np.abs(np.arange(columns) + 0.5 - columns / 2) / (columns / 2)  # 0 .. 1 .. 0: periodic

@@ -93,7 +93,8 @@ def tone_radii(
         Largest radius over the distance to the nearest other dot, in (0, 10]: 1 lets a dot reach its nearest
         neighbour's centre, enough to fill black (blue noise fills the paper at about 0.7).
     samples_per_dot : int
-        Analysis grid pixels per dot on average (4 to 1024); the cost grows with it.
+        Analysis grid pixels per dot on average (4 to 1024), and at least half as many per dot where the dots
+        are densest (``_grid``); the cost grows with it.
     periodic : bool
         The canvas wraps around, as the torus the dots were placed on: the dots across each edge are the
         neighbours of the dots near it, and their discs (drawn across the edge too) ink the strip between
@@ -115,7 +116,7 @@ def tone_radii(
     passes, samples_per_dot, bounds = check_options(passes, samples_per_dot, min_radius, max_radius, max_ratio)
     if len(centres) == 0:
         return np.zeros(0)
-    grid = _grid(size, len(centres), samples_per_dot)
+    grid = _grid(size, len(centres), samples_per_dot, densest_ratio(centres, darkness, size))
     canvas = Canvas.around(size, grid, periodic, len(centres))
     ink = _Ink(canvas.place(centres), canvas.size, canvas.grid, canvas.widen(_resample(darkness, grid)), bounds)
     for _ in range(passes):
@@ -209,21 +210,7 @@ def tone_radii_layers(
     total = sum(len(c) for c, _ in checked)
     if total == 0:
         return [np.zeros(0) for _ in checked]
-    grid = _grid(size, total, samples_per_dot)
-    canvas = Canvas.around(size, grid, periodic, min(len(c) for c, _ in checked if len(c)))
-    placed = [canvas.place(c) for c, _ in checked]
-    inks = [
-        _Ink(p, canvas.size, canvas.grid, canvas.widen(_resample(a, grid)), bounds) if len(c) else None
-        for p, (c, a) in zip(placed, checked, strict=True)
-    ]
-    if total > 1:
-        everything = np.concatenate(placed)
-        for ink, p in zip(inks, placed, strict=True):
-            if ink is not None:
-                nearest = nearest_elsewhere(p, everything)
-                ink.cap = np.maximum(np.minimum(ink.cap, max_ratio_any * nearest), ink.min_radius)
-                ink.floor = np.minimum(ink.floor, ink.cap)
-                ink.radii = ink.bounded(ink.radii)
+    canvas, grid, inks = _joint_inks(checked, size, samples_per_dot, bounds, max_ratio_any, periodic)
     drawn = [ink.draw() if ink else np.zeros(canvas.grid, np.float32) for ink in inks]
     channels = [np.flatnonzero(a > 0) for a in absorb]
     goal = {
@@ -247,6 +234,30 @@ def tone_radii_layers(
             ink.correct(np.clip(ink.covered + step / (norm + REGULARISATION), 0.0, 1.0))
             drawn[k] = ink.draw()
     return [ink.final()[: len(c)] if ink else np.zeros(0) for ink, (c, _) in zip(inks, checked, strict=True)]
+
+
+def _joint_inks(checked, size, samples_per_dot, bounds, max_ratio_any, periodic):
+    """``(canvas, grid, inks)`` for ``tone_radii_layers``' joint correction: one analysis grid for all inks (the
+    picture's ``grid``, widened on a periodic ``canvas``), an ``_Ink`` per ink with dots (None without), each dot's
+    radius capped at ``max_ratio_any`` times the distance to the nearest dot of any ink."""
+    total = sum(len(c) for c, _ in checked)
+    densest = max(densest_ratio(c, a, size) for c, a in checked if len(c))
+    grid = _grid(size, total, samples_per_dot, densest)
+    canvas = Canvas.around(size, grid, periodic, min(len(c) for c, _ in checked if len(c)))
+    placed = [canvas.place(c) for c, _ in checked]
+    inks = [
+        _Ink(p, canvas.size, canvas.grid, canvas.widen(_resample(a, grid)), bounds) if len(c) else None
+        for p, (c, a) in zip(placed, checked, strict=True)
+    ]
+    if total > 1:
+        everything = np.concatenate(placed)
+        for ink, p in zip(inks, placed, strict=True):
+            if ink is not None:
+                nearest = nearest_elsewhere(p, everything)
+                ink.cap = np.maximum(np.minimum(ink.cap, max_ratio_any * nearest), ink.min_radius)
+                ink.floor = np.minimum(ink.floor, ink.cap)
+                ink.radii = ink.bounded(ink.radii)
+    return canvas, grid, inks
 
 
 def fit_inside(layers, size, *, how="clamp", margin=None):
@@ -357,10 +368,24 @@ class _Ink:
         return np.clip(self.radii, self.min_radius, self.cap)
 
 
-def _grid(size, count, samples_per_dot):
-    """``(rows, columns)`` of the analysis grid: about ``samples_per_dot`` square pixels per dot."""
+def densest_ratio(centres, darkness, size):
+    """How much denser than on average the densest dots are: the 99th percentile of the darkness at the dots
+    over the darkness's mean (the torus places dots in proportion to it)."""
+    rows, columns = np.shape(darkness)
     width, height = size
-    pixels = min(samples_per_dot * count, MAX_GRID_PIXELS)
+    column = np.clip((centres[:, 0] * columns / width).astype(np.int64), 0, columns - 1)
+    row = np.clip((centres[:, 1] * rows / height).astype(np.int64), 0, rows - 1)
+    return float(np.percentile(darkness[row, column], 99) / max(float(np.mean(darkness)), 1e-12))
+
+
+def _grid(size, count, samples_per_dot, densest=1.0):
+    """``(rows, columns)`` of the analysis grid: about ``samples_per_dot`` square pixels per dot, and at least
+    half as many per dot where the dots are ``densest`` times as dense as on average. On a light page with a few
+    small dark marks (28 times as dense there) the average alone left the marks' dots a pixel each, their
+    coverage measured too coarsely, and a 6-pixel mark of luminance 0.05 came out 0.17 at its core (0.05 at
+    twice the average's share: sigma 4 px RMSE 0.0040 -> 0.0027, the darkest tenth 0.061 -> 0.021)."""
+    width, height = size
+    pixels = min(samples_per_dot * count * max(1.0, densest / 2), MAX_GRID_PIXELS)
     step = np.sqrt(width * height / pixels)
     return max(int(round(height / step)), 1), max(int(round(width / step)), 1)
 
