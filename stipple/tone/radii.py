@@ -312,8 +312,7 @@ class _Ink:
         rows, columns = grid
         width, height = size
         self.centres, self.size, self.grid = centres, size, grid
-        column = np.clip((centres[:, 0] * columns / width).astype(np.int64), 0, columns - 1)
-        row = np.clip((centres[:, 1] * rows / height).astype(np.int64), 0, rows - 1)
+        row, column = canvas_pixels(centres, size, grid)
         flat = row * columns + column
         owner_of_pixel = np.full(rows * columns, -1, dtype=np.int64)
         owner_of_pixel[flat] = np.arange(len(centres))
@@ -368,14 +367,21 @@ class _Ink:
         return np.clip(self.radii, self.min_radius, self.cap)
 
 
-def densest_ratio(centres, darkness, size):
-    """How much denser than on average the densest dots are: the 99th percentile of the darkness at the dots
-    over the darkness's mean (the torus places dots in proportion to it)."""
-    rows, columns = np.shape(darkness)
+def canvas_pixels(centres, size, shape):
+    """``(row, column)`` of the pixel of an image of ``shape = (rows, columns)`` stretched over a canvas of
+    ``size = (width, height)`` that holds each of ``centres`` (canvas units; those beyond an edge: its nearest)."""
+    rows, columns = shape
     width, height = size
     column = np.clip((centres[:, 0] * columns / width).astype(np.int64), 0, columns - 1)
     row = np.clip((centres[:, 1] * rows / height).astype(np.int64), 0, rows - 1)
-    return float(np.percentile(darkness[row, column], 99) / max(float(np.mean(darkness)), 1e-12))
+    return row, column
+
+
+def densest_ratio(centres, darkness, size):
+    """How much denser than on average the densest dots are: the 99th percentile of the darkness at the dots
+    over the darkness's mean (the torus places dots in proportion to it)."""
+    at_dots = darkness[canvas_pixels(centres, size, np.shape(darkness))]
+    return float(np.percentile(at_dots, 99) / max(float(np.mean(darkness)), 1e-12))
 
 
 def _grid(size, count, samples_per_dot, densest=1.0):
