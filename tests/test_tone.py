@@ -357,3 +357,36 @@ def test_joint_inks_print_the_image_colour(two_colours, start):
     drawn = list(zip(centres, radii, strict=True))
     picture = multiply_picture(drawn, colours, (48, 32), (32, 48), supersample=6)
     assert np.abs(picture - oracle_print(drawn, colours, (48, 32), (32, 48), offset=0.5)).max() <= 0.5 / 255 + 1e-6
+
+
+def test_a_periodic_picture_whose_grid_reaches_the_bound_is_drawn(blue_noise, monkeypatch):
+    """A million dots asked for an analysis grid at ``MAX_GRID_PIXELS`` and the periodic canvas around it was
+    refused as too large to draw, after the whole run. Here the bound is lowered to reach it with 1500 dots."""
+    import stipple.tone.radii as radii_module
+    import stipple.tone.raster as raster_module
+
+    bound = 1 << 14
+    monkeypatch.setattr(radii_module, "MAX_GRID_PIXELS", bound)
+    monkeypatch.setattr(raster_module, "MAX_GRID_PIXELS", bound)
+    size = (48.0, 48.0)
+    radii = tone_radii(blue_noise * size, np.full((48, 48), 0.5), size, periodic=True)
+    drawn = oracle_image(blue_noise * size, radii, size, (48, 48), per_pixel=4)
+    assert abs(drawn.mean() - 0.5) < 0.02
+
+
+def test_an_ink_of_few_dots_does_not_ask_for_the_grid_of_all_dots_at_its_density(blue_noise, monkeypatch):
+    """The joint grid gives every ink's densest dots half the average's pixels; a few dots of one ink in a small
+    mark (about 200 times that ink's mean density) once sized the grid as if all the dots were that dense."""
+    import stipple.tone.radii as radii_module
+
+    asked = []
+    grid = radii_module._grid
+    monkeypatch.setattr(radii_module, "_grid", lambda *args: asked.append(grid(*args)) or asked[-1])
+    size = (48.0, 48.0)
+    y, x = np.mgrid[0:48, 0:48] + 0.5
+    mark = np.where(np.hypot(x - 24, y - 24) <= 1.5, 0.9, 0.0)
+    few = np.array([[23.5, 23.5], [24.5, 24.5], [23.5, 24.5], [24.5, 23.5]])
+    layers = [(blue_noise * size, np.full((48, 48), 0.5)), (few, mark)]
+    tone_radii_layers(layers, size, colours=[(0, 1, 1), (0, 0, 0)], passes=0, periodic=True)
+    (rows, columns), dots = asked[0], len(blue_noise) + len(few)
+    assert rows * columns <= 24 * dots * 1.05, (rows * columns) / dots

@@ -116,8 +116,8 @@ def tone_radii(
     passes, samples_per_dot, bounds = check_options(passes, samples_per_dot, min_radius, max_radius, max_ratio)
     if len(centres) == 0:
         return np.zeros(0)
-    grid = _grid(size, len(centres), samples_per_dot, densest_ratio(centres, darkness, size))
-    canvas = Canvas.around(size, grid, periodic, len(centres))
+    dots = len(centres) * max(1.0, densest_ratio(centres, darkness, size) / 2)
+    grid, canvas = _analysis_canvas(size, dots, samples_per_dot, periodic, len(centres))
     ink = _Ink(canvas.place(centres), canvas.size, canvas.grid, canvas.widen(_resample(darkness, grid)), bounds)
     for _ in range(passes):
         ink.correct(ink.target)
@@ -241,9 +241,11 @@ def _joint_inks(checked, size, samples_per_dot, bounds, max_ratio_any, periodic)
     picture's ``grid``, widened on a periodic ``canvas``), an ``_Ink`` per ink with dots (None without), each dot's
     radius capped at ``max_ratio_any`` times the distance to the nearest dot of any ink."""
     total = sum(len(c) for c, _ in checked)
-    densest = max(densest_ratio(c, a, size) for c, a in checked if len(c))
-    grid = _grid(size, total, samples_per_dot, densest)
-    canvas = Canvas.around(size, grid, periodic, min(len(c) for c, _ in checked if len(c)))
+    # Every ink's densest dots get half the average's share of the grid: an ink of few dots, dense in one place,
+    # asks for as many pixels as its own dots there need, not as all the dots would at its density.
+    dots = max(total, max(len(c) * densest_ratio(c, a, size) / 2 for c, a in checked if len(c)))
+    fewest = min(len(c) for c, _ in checked if len(c))
+    grid, canvas = _analysis_canvas(size, dots, samples_per_dot, periodic, fewest)
     placed = [canvas.place(c) for c, _ in checked]
     inks = [
         _Ink(p, canvas.size, canvas.grid, canvas.widen(_resample(a, grid)), bounds) if len(c) else None
@@ -384,14 +386,24 @@ def densest_ratio(centres, darkness, size):
     return float(np.percentile(at_dots, 99) / max(float(np.mean(darkness)), 1e-12))
 
 
-def _grid(size, count, samples_per_dot, densest=1.0):
-    """``(rows, columns)`` of the analysis grid: about ``samples_per_dot`` square pixels per dot, and at least
-    half as many per dot where the dots are ``densest`` times as dense as on average. On a light page with a few
-    small dark marks (28 times as dense there) the average alone left the marks' dots a pixel each, their
-    coverage measured too coarsely, and a 6-pixel mark of luminance 0.05 came out 0.17 at its core (0.05 at
-    twice the average's share: sigma 4 px RMSE 0.0040 -> 0.0027, the darkest tenth 0.061 -> 0.021)."""
+def _analysis_canvas(size, dots, samples_per_dot, periodic, fewest):
+    """``(grid, canvas)``: the picture's analysis grid of ``samples_per_dot`` pixels for each of ``dots`` and the
+    canvas around it (``Canvas.around``), the grid made smaller where the canvas would pass ``MAX_GRID_PIXELS``
+    (a million dots' grid was at that bound, and its widened canvas could not be drawn).
+
+    The callers count the densest dots as more than one: the average share alone left the dots of a few small
+    dark marks on a light page (28 times as dense there) a pixel each, their coverage measured too coarsely, and a
+    6-pixel mark of luminance 0.05 came out 0.17 at its core (0.05 at half the average's share for the densest
+    dots: sigma 4 px RMSE 0.0040 -> 0.0027, the darkest tenth 0.061 -> 0.021).
+    """
+    room = 0.98 * MAX_GRID_PIXELS / Canvas.widening(size, periodic, fewest)  # 2 % for the margins' whole cells
+    grid = _grid(size, min(samples_per_dot * dots, room))
+    return grid, Canvas.around(size, grid, periodic, fewest)
+
+
+def _grid(size, pixels):
+    """``(rows, columns)`` of about ``pixels`` square pixels over a canvas of ``size``."""
     width, height = size
-    pixels = min(samples_per_dot * count * max(1.0, densest / 2), MAX_GRID_PIXELS)
     step = np.sqrt(width * height / pixels)
     return max(int(round(height / step)), 1), max(int(round(width / step)), 1)
 

@@ -11,8 +11,10 @@ are those of the torus (``stipple.render.dots.periodic_tone_dots`` draws the cop
 import numpy as np
 
 # The periodic canvas reaches this many mean dot spacings (of the sparsest ink) beyond every edge: further than
-# the cell of a dot in a region a ninth as dense as the mean.
+# the cell of a dot in a region a ninth as dense as the mean; but at most this share of the picture (an ink of a
+# few dots would otherwise widen the canvas to nine pictures, and the grid shrink to fit it).
 WRAP_SPACINGS = 3
+MAX_WRAP_SHARE = 0.5
 
 
 class Canvas:
@@ -30,18 +32,16 @@ class Canvas:
 
     @classmethod
     def around(cls, size, grid, periodic, fewest):
-        """The picture's canvas, or (``periodic``) the one that wraps ``WRAP_SPACINGS`` spacings of ``fewest``
-        dots around it, at most the grid's own size."""
-        if not periodic:
-            return cls(size, grid)
-        width, height = size
-        spacing = np.sqrt(width * height / max(fewest, 1))
+        """The picture's canvas, or (``periodic``) the one that wraps ``wrap_shares`` of the picture around it."""
         rows, columns = grid
-        margin = (
-            min(rows, int(np.ceil(WRAP_SPACINGS * spacing * rows / height))),
-            min(columns, int(np.ceil(WRAP_SPACINGS * spacing * columns / width))),
-        )
-        return cls(size, grid, margin)
+        share_x, share_y = wrap_shares(size, periodic, fewest)
+        return cls(size, grid, (int(np.ceil(share_y * rows)), int(np.ceil(share_x * columns))))
+
+    @staticmethod
+    def widening(size, periodic, fewest):
+        """How many times the picture's area the canvas ``around`` it covers (before rounding to whole cells)."""
+        share_x, share_y = wrap_shares(size, periodic, fewest)
+        return (1 + 2 * share_x) * (1 + 2 * share_y)
 
     def widen(self, image):
         """An image on the picture's analysis grid, ``(rows, columns[, channels])``, wrapped into the margins."""
@@ -55,6 +55,16 @@ class Canvas:
             return np.asarray(centres, dtype=float).reshape(-1, 2)
         positions, _ = wrapped_copies(centres, self.picture_size, self.offset)
         return positions + self.offset
+
+
+def wrap_shares(size, periodic, fewest):
+    """``(x, y)``: the periodic canvas's margin on each side as a share of the picture's width and height,
+    ``WRAP_SPACINGS`` mean spacings of ``fewest`` dots, at most ``MAX_WRAP_SHARE``; ``(0, 0)`` if not ``periodic``."""
+    if not periodic:
+        return 0.0, 0.0
+    width, height = size
+    spacing = np.sqrt(width * height / max(fewest, 1))
+    return tuple(min(WRAP_SPACINGS * spacing / extent, MAX_WRAP_SHARE) for extent in (width, height))
 
 
 def wrapped_copies(centres, size, margin):
