@@ -99,3 +99,36 @@ def test_vpype_plugin_adds_one_named_coloured_layer_per_ink(colour_image):
     assert document.page_size == pytest.approx((width, width * 12 / 16))
     centres = np.array([path.mean() for layer in layers.values() for path in layer])
     assert np.all((centres.real >= 0) & (centres.real <= width) & (centres.imag >= 0) & (centres.imag <= width * 0.75))
+
+
+def composite_svg(svg, shape, per_pixel=8):
+    """The SVG's circles as a viewer composites them on white paper, sampled ``per_pixel``² times a user unit:
+    each layer's union of discs, laid over what is below, or multiplied with it where the layer's style says
+    ``mix-blend-mode:multiply``. Returns ``(rows, columns, 3)`` colours in [0, 1]."""
+    import re
+
+    rows, columns = shape
+    y, x = (np.mgrid[0 : rows * per_pixel, 0 : columns * per_pixel] + 0.5) / per_pixel
+    colour = np.ones((*x.shape, 3))
+    for head, body in re.findall(r"(<g [^>]*>)(.*?)</g>", svg, flags=re.S):
+        ink = np.array([int(re.search(r'fill="#(\w{6})"', head).group(1)[i : i + 2], 16) for i in (0, 2, 4)]) / 255
+        covered = np.zeros(x.shape, dtype=bool)
+        for cx, cy, r in re.findall(r'<circle cx="([-\d.]+)" cy="([-\d.]+)" r="([-\d.]+)"', body):
+            covered |= (x - float(cx)) ** 2 + (y - float(cy)) ** 2 < float(r) ** 2
+        painted = colour * ink if "mix-blend-mode:multiply" in head else np.broadcast_to(ink, colour.shape)
+        colour = np.where(covered[..., None], painted, colour)
+    return colour.reshape(rows, per_pixel, columns, per_pixel, 3).mean(axis=(1, 3))
+
+
+def test_the_svg_composites_its_inks_as_the_png_prints_them(colour_image, tmp_path):
+    """Tone-style dots of different inks overlap; the PNG multiplies them. An SVG whose layers were painted over
+    each other showed the last ink where they overlap (a red drawn orange-yellow)."""
+    path, rgb = colour_image
+    svg, png = tmp_path / "dots.svg", tmp_path / "dots.png"
+    result = run(["colour", path, "-M", 300, "--iterations", 15, "-q", "-o", svg, "-o", png, "--png-width", 160])
+    assert result.exit_code == 0, result.output
+    seen = composite_svg(svg.read_text(), rgb.shape[:2])
+    printed = np.asarray(Image.open(png).convert("RGB"), dtype=float) / 255
+    for half in (np.s_[:, 1:7], np.s_[:, 9:15]):
+        big = (half[0], slice(half[1].start * 10, half[1].stop * 10))
+        assert np.abs(seen[half].mean(axis=(0, 1)) - printed[big].mean(axis=(0, 1))).max() < 0.03

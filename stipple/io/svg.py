@@ -34,12 +34,14 @@ def path_data(path):
     return "M" + " L".join(f"{z.real:.4f},{z.imag:.4f}" for z in path)
 
 
-def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=None, notes=()):
+def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=None, notes=(), blend="over"):
     """SVG of ``Dots`` layers, one Inkscape layer each, on a ``size = (width, height)`` user-unit canvas.
 
     Round dots are circles, foreshortened ones ellipses, pen-drawn ones stroked paths ``pen_width`` wide.
     Filled dots also carry a stroke of their colour (width 0), so that ``vpype read`` keeps each layer's pen
     colour. ``notes`` become comments and the ``<desc>``; a background other than white is a filled rectangle.
+    ``blend`` "multiply" (inks printed over each other, as the PNG draws them) gives every layer the CSS
+    ``mix-blend-mode: multiply`` (browsers, Inkscape); "over" paints each layer over the ones before.
     """
     width, height = size
     value, unit = physical_width
@@ -54,14 +56,16 @@ def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=No
     if tuple(background) != WHITE:
         parts.append(f'<rect x="0" y="0" width="{width:g}" height="{height:g}" fill="{hex_colour(background)}"/>')
     for index, dots in enumerate(layers, start=1):
-        parts.append(_svg_layer(index, dots, pen_width))
+        parts.append(_svg_layer(index, dots, pen_width, blend))
     parts.append("</svg>\n")
     return "\n".join(parts).encode()
 
 
-def _svg_layer(index, dots, pen_width):
+def _svg_layer(index, dots, pen_width, blend="over"):
     colour = hex_colour(dots.colour)
     label = f'id="layer{index}" inkscape:groupmode="layer" inkscape:label="{index}-{dots.name}"'
+    if blend == "multiply":
+        label += ' style="mix-blend-mode:multiply"'
     if dots.paths is not None:
         head = (
             f'<g {label} fill="none" stroke="{colour}" stroke-width="{pen_width:.4f}" '

@@ -17,6 +17,7 @@ def drawing_bytes(drawing, fmt):
             background=drawing.background,
             pen_width=drawing.pen_width,
             notes=drawing.notes,
+            blend=drawing.blend,
         )
     picture = render_picture(
         drawing.layers,
