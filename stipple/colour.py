@@ -138,6 +138,16 @@ def separate(rgb, separation="cmyk", black=1.0):
     return _with_mass([Layer(name, INK_COLOURS[name], np.maximum(value, 0.0)) for name, value in densities.items()])
 
 
+def print_target(rgb, separation):
+    """The colour that the inks of ``separation`` are to print for ``rgb``: the image itself, but for "gray" its
+    luminance in all three channels (one black ink cannot print a colour, and its tone matched to the image's
+    colour channels equally would be ``1 - mean(R, G, B)``, a saturated blue drawn 0.34 for luminance 0.20)."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    if isinstance(separation, str) and separation == "gray":
+        return np.repeat((rgb @ _LUMA)[..., None], 3, axis=2)
+    return rgb
+
+
 def _with_mass(layers):
     """The layers that have ink; an error if none has."""
     layers = [layer for layer in layers if layer.density.sum() > 0]

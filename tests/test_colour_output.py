@@ -132,3 +132,23 @@ def test_the_svg_composites_its_inks_as_the_png_prints_them(colour_image, tmp_pa
     for half in (np.s_[:, 1:7], np.s_[:, 9:15]):
         big = (half[0], slice(half[1].start * 10, half[1].stop * 10))
         assert np.abs(seen[half].mean(axis=(0, 1)) - printed[big].mean(axis=(0, 1))).max() < 0.03
+
+
+def test_the_gray_palette_prints_the_image_luminance(tmp_path):
+    """One black ink prints gray: its tone must be the image's luminance, not the mean of its channels (a
+    saturated blue, luminance 0.21, was drawn 0.34)."""
+    pixels = np.zeros((16, 24, 3), dtype=np.uint8)
+    pixels[:, :12] = (20, 40, 200)  # blue: luminance 0.21, channel mean 0.34
+    pixels[:, 12:] = (230, 210, 20)  # yellow: luminance 0.76, channel mean 0.60
+    path, png = tmp_path / "blocks.png", tmp_path / "gray.png"
+    Image.fromarray(pixels).save(path)
+    result = run(["colour", path, "-M", 1200, "--palette", "gray", "--iterations", 30, "-q", "-o", png])
+    assert result.exit_code == 0, result.output
+    drawn = np.asarray(Image.open(png).convert("RGB"), dtype=float) / 255 @ [0.299, 0.587, 0.114]
+    luminance = pixels / 255 @ [0.299, 0.587, 0.114]
+    columns = drawn.shape[1]
+    for drawn_half, wanted in (
+        (drawn[:, 3 * columns // 24 : 9 * columns // 24], luminance[0, 0]),
+        (drawn[:, 15 * columns // 24 : 21 * columns // 24], luminance[0, -1]),
+    ):
+        assert abs(drawn_half.mean() - wanted) < 0.03, (drawn_half.mean(), wanted)

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import colour_problem
+from ..colour import colour_problem, print_target
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_canvas, default_png_width
@@ -75,7 +75,8 @@ def stipple_colour(image, formats, recipe, *, session=None, announce=None):
     if recipe.order:
         placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
     coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
-    files = layered_files(placed, shape, formats, recipe.draw, ink=ink, coverages=coverages, target=rgb)
+    target = print_target(rgb, settings["separation"])
+    files = layered_files(placed, shape, formats, recipe.draw, ink=ink, coverages=coverages, target=target)
     return ImageOutputs(files, result, travel)
 
 
