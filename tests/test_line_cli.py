@@ -44,6 +44,20 @@ def test_line_writes_one_closed_path_as_csv_svg_png(ramp_path, tmp_path):
     assert picture.shape == (128, 192) and picture.min() < 128 and picture.max() == 255
 
 
+def test_an_inverted_line_is_drawn_white_on_black(ramp_path, tmp_path):
+    """``--invert`` puts the line on the light parts and draws it white on black, so the picture follows the
+    image's tones (it was stroked black on white: the negative)."""
+    png, svg = tmp_path / "line.png", tmp_path / "line.svg"
+    result = run(["line", ramp_path, "--invert", "-M", 400, "--iterations", 60, "-q", "-o", png, "-o", svg])
+    assert result.exit_code == 0, result.output
+    drawn = np.asarray(Image.open(png).convert("L"), dtype=float) / 255
+    quarters = [drawn[:, k * drawn.shape[1] // 4 : (k + 1) * drawn.shape[1] // 4].mean() for k in range(4)]
+    assert np.all(np.diff(quarters) > 0.02), quarters  # light where the ramp is light
+    assert quarters[0] < 0.15
+    text = svg.read_text()
+    assert 'fill="#000000"' in text and 'stroke="#ffffff"' in text
+
+
 def test_evaluate_a_line(ramp_path, tmp_path):
     csv = tmp_path / "line.csv"
     assert run(["line", ramp_path, "-M", 300, "--iterations", 40, "-q", "-o", csv]).exit_code == 0

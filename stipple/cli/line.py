@@ -14,7 +14,8 @@ OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
 
 
 @click.command()
-# The line is drawn black on white with one pen: the dot options and the dots' near field would do nothing.
+# The line is drawn with one pen, black on white (--invert: white on black): the dot options and the dots' near
+# field would do nothing.
 @without("near_field", "safeguard", "dot_radius", "order", "background", "color", "dot_style", "style")
 @click.argument("image", required=False)
 @common_options(iterations=LINE_ITERATIONS, settle=False)
@@ -31,7 +32,7 @@ def line(ctx, image, **options):
     from ..halftone import check_count
     from ..io.commit import output_format
     from ..io.images import load_input
-    from ..io.units import parse_length
+    from ..io.units import BLACK, WHITE, parse_length
     from ..line import line_points
     from ..line.problem import line_settings
     from ..pipelines.inputs import read_torus_init
@@ -56,8 +57,15 @@ def line(ctx, image, **options):
             result, stopped_by = solve_line(weights, options, init)
             points = line_points(result.points)
             formats = [output_format(path) for path in options["outputs"]]
+            colours = {"color": WHITE, "background": BLACK} if options["invert"] else {}
             files = line_files(
-                points, weights.shape, formats, width=width, pen_width=pen_width, png_width=options["png_width"]
+                points,
+                weights.shape,
+                formats,
+                width=width,
+                pen_width=pen_width,
+                png_width=options["png_width"],
+                **colours,
             )
             write_outputs(options["outputs"], files)
     except StippleError as error:

@@ -8,7 +8,7 @@ from PIL import Image, ImageDraw
 from .. import allocator
 from ..errors import StippleError
 from .raster import disc_mask
-from .units import WHITE
+from .units import BLACK, WHITE
 
 SUPERSAMPLE = 4
 MAX_CANVAS_SIDE = 1 << 20
@@ -89,19 +89,22 @@ def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):
     return png_bytes(image)
 
 
-def render_line(pixels, size, pixels_wide, pen_width, closed=True):
-    """An antialiased grayscale image of a black polyline of ``pen_width`` (user units) on white.
+def render_line(pixels, size, pixels_wide, pen_width, closed=True, colour=BLACK, background=WHITE):
+    """An antialiased image of a polyline of ``pen_width`` (user units) in ``colour`` on ``background``
+    (grayscale when both are grays).
 
     ``pixels`` are the vertices in user units of a canvas of ``size = (width, height)``; drawn at 4× and reduced.
     """
     width, height = size
     scale = pixels_wide / width * SUPERSAMPLE
-    canvas = Image.new("L", (int(round(width * scale)), int(round(height * scale))), 255)
+    channels = 1 if len(set(colour)) == 1 and len(set(background)) == 1 else 3
+    paper, ink = _pixel_value(background, channels), _pixel_value(colour, channels)
+    canvas = Image.new("L" if channels == 1 else "RGB", (int(round(width * scale)), int(round(height * scale))), paper)
     vertices = np.asarray(pixels) * scale
     if closed:
         vertices = np.vstack([vertices, vertices[:1]])
     stroke = max(int(round(pen_width * scale)), 1)
-    ImageDraw.Draw(canvas).line([tuple(v) for v in vertices], fill=0, width=stroke, joint="curve")
+    ImageDraw.Draw(canvas).line([tuple(v) for v in vertices], fill=ink, width=stroke, joint="curve")
     return canvas.reduce(SUPERSAMPLE)
 
 

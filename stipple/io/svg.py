@@ -2,11 +2,12 @@
 
 import numpy as np
 
-from .units import WHITE, hex_colour
+from .units import BLACK, WHITE, hex_colour
 
 
-def line_svg_bytes(pixels, size, physical_width, pen_width, comment=""):
-    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide, unfilled.
+def line_svg_bytes(pixels, size, physical_width, pen_width, comment="", colour=BLACK, background=WHITE):
+    """One closed ``<path>`` (``M x y L ... Z``) stroked ``pen_width`` user units wide in ``colour``, unfilled, on
+    ``background`` (a filled rectangle unless white).
 
     The path sits in one Inkscape layer named "line" whose group carries the stroke, so ``vpype read`` and
     plotter software see one pen of that width; the page is ``physical_width`` wide (user units: input pixels).
@@ -20,7 +21,9 @@ def line_svg_bytes(pixels, size, physical_width, pen_width, comment=""):
             '<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
             f'width="{value:g}{unit}" height="{value * height / width:.6g}{unit}" viewBox="0 0 {width:g} {height:g}">',
             f"<!-- {comment} -->" if comment else "",
-            f'<g id="layer1" inkscape:groupmode="layer" inkscape:label="1-line" fill="none" stroke="black" '
+            *_background(background, size),
+            f'<g id="layer1" inkscape:groupmode="layer" inkscape:label="1-line" fill="none" '
+            f'stroke="{hex_colour(colour)}" '
             f'stroke-width="{pen_width:.4f}" stroke-linecap="round" stroke-linejoin="round">',
             f'<path d="M {points} Z"/>',
             "</g>",
@@ -53,12 +56,19 @@ def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=No
     parts.extend(f"<!-- {note} -->" for note in notes)
     if notes:
         parts.append(f"<desc>{'; '.join(notes)}</desc>")
-    if tuple(background) != WHITE:
-        parts.append(f'<rect x="0" y="0" width="{width:g}" height="{height:g}" fill="{hex_colour(background)}"/>')
+    parts.extend(_background(background, size))
     for index, dots in enumerate(layers, start=1):
         parts.append(_svg_layer(index, dots, pen_width, blend))
     parts.append("</svg>\n")
     return "\n".join(parts).encode()
+
+
+def _background(background, size):
+    """A filled rectangle under the drawing (as a list of one line), or none on white paper."""
+    if tuple(background) == WHITE:
+        return []
+    width, height = size
+    return [f'<rect x="0" y="0" width="{width:g}" height="{height:g}" fill="{hex_colour(background)}"/>']
 
 
 def _svg_layer(index, dots, pen_width, blend="over"):

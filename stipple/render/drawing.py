@@ -2,7 +2,7 @@
 
 from dataclasses import dataclass, field
 
-from ..io.units import WHITE
+from ..io.units import BLACK, WHITE
 
 
 @dataclass
@@ -13,8 +13,8 @@ class Drawing:
     Either ``layers`` of dots (``stipple.render.dots.Dots``: centres, radii, colours, foreshortening, pen paths),
     laid on ``background`` one over the other (``blend`` "over") or printed as inks ("multiply"), pen paths
     stroked ``pen_width`` user units wide; or one closed ``line`` (vertices in user units) stroked ``stroke``
-    wide. ``notes`` describe it (SVG comments); ``outline``, a box ``(left, top, right, bottom)``, is the globe's
-    disc, shaded under the first layer in the PNG.
+    wide in ``line_colour`` on ``background``. ``notes`` describe it (SVG comments); ``outline``, a box ``(left,
+    top, right, bottom)``, is the globe's disc, shaded under the first layer in the PNG.
     """
 
     size: tuple
@@ -28,6 +28,7 @@ class Drawing:
     outline: tuple | None = None
     line: object = None
     stroke: float = 1.0
+    line_colour: tuple = BLACK
 
     @property
     def count(self):

@@ -83,10 +83,11 @@ def layered_drawing(
     )
 
 
-def line_drawing(points, shape, *, width=(200.0, "mm"), pen_width=None, png_width=None):
+def line_drawing(points, shape, *, width=(200.0, "mm"), pen_width=None, png_width=None, color=BLACK, background=WHITE):
     """The ``Drawing`` of a closed curve (vertices in unit coordinates, path order) for an image of ``shape``: one
-    closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``, default one input pixel),
-    ``png_width`` pixels wide as a PNG (default: the input's width × 4)."""
+    closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``, default one input pixel)
+    in ``color`` on ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default:
+    the input's width × 4)."""
     rows, columns = shape
     pixels = np.asarray(points) * np.array([columns, rows])
     stroke = 1.0 if pen_width is None else to_user_units(pen_width, width, columns)
@@ -95,8 +96,10 @@ def line_drawing(points, shape, *, width=(200.0, "mm"), pen_width=None, png_widt
         width,
         png_width or 4 * columns,
         notes=(f"one closed line, {len(pixels)} vertices",),
+        background=tuple(background),
         line=pixels,
         stroke=stroke,
+        line_colour=tuple(color),
     )
 
 
