@@ -35,7 +35,7 @@ from .sphere_density import (
     unit_vectors,
 )
 from .spread import spread_close_sphere
-from .torus import SOLVE_BANDWIDTH_FACTOR, check_bandwidth_factor, stiffness
+from .torus import SOLVE_BANDWIDTH_FACTOR, check_bandwidth_factor, pair_share, stiffness
 from .transforms import SphereFourier, alm_degrees_orders, spherical_angles
 
 DEFAULT_EPSILON = 1e-10
@@ -216,7 +216,10 @@ def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, 
     target = density.coefficients(bandwidth, threads)
     degrees, _ = alm_degrees_orders(bandwidth)
     kernel_coeffs = sphere_kernel(kernel, degrees)
-    fourier = SphereFourier(bandwidth, epsilon, threads)
+    # The pairs run beside the adjoints on their share of the threads, the adjoints on the rest (one of two): the
+    # same bits every run, and those of one thread; the syntheses keep every thread.
+    pair_threads = pair_share(threads) if near_field else 0
+    fourier = SphereFourier(bandwidth, epsilon, threads, adjoint_threads=threads - pair_threads)
     weight = target[0].real * np.sqrt(4 * np.pi) / n_points
     if not near_field:
         discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
@@ -224,7 +227,8 @@ def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, 
     near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
     cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
     discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
-    return SumObjective(discrepancy, NearField(near, weight, SpherePairs(), threads=threads)), discrepancy
+    pairs = NearField(near, weight, SpherePairs(), threads=pair_threads or threads)
+    return SumObjective(discrepancy, pairs, concurrent=pair_threads > 0), discrepancy
 
 
 def halftone_sphere(

@@ -366,20 +366,26 @@ class SphereFourier:
     Coefficients are stored for ``m >= 0`` only; a real field is ``sum a_n0 Y_n0 + 2 Re sum_{m>0} a_nm Y_nm``,
     hence ``multiplicity`` 1 for ``m = 0`` and 2 for ``m > 0``. Tangent vectors are ``(M, 3)`` arrays in R³,
     converted to (e_theta, e_phi) components only here.
+
+    Syntheses run on ``threads``, adjoints on ``adjoint_threads`` (default: the same). ducc0's adjoint with
+    several threads adds the points' contributions in a scheduling-dependent order (two runs differ in the last
+    digits) and its synthesis does not: one adjoint thread gives the same bits every time.
     """
 
-    def __init__(self, lmax, epsilon, threads):
+    def __init__(self, lmax, epsilon, threads, adjoint_threads=None):
         import ducc0
 
         self._sht = ducc0.sht
         self.lmax = lmax
         self.epsilon = epsilon
         self.threads = threads
+        self.adjoint_threads = threads if adjoint_threads is None else adjoint_threads
         self.multiplicity = np.where(alm_degrees_orders(lmax)[1] == 0, 1.0, 2.0)
         self.counts = {"synthesis": 0, "adjoint": 0, "set_points": 0}
 
-    def _options(self):
-        return dict(lmax=self.lmax, loc=self._loc, epsilon=self.epsilon, nthreads=self.threads)
+    def _options(self, adjoint=False):
+        threads = self.adjoint_threads if adjoint else self.threads
+        return dict(lmax=self.lmax, loc=self._loc, epsilon=self.epsilon, nthreads=threads)
 
     def set_points(self, points):
         theta, phi = spherical_angles(points)
@@ -390,7 +396,7 @@ class SphereFourier:
 
     def analysis(self):
         self.counts["adjoint"] += 1
-        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **self._options())[0]
+        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **self._options(adjoint=True))[0]
 
     def gradient_synthesis(self, coeffs):
         e_theta, e_phi = self._frame
@@ -418,6 +424,8 @@ class SphereFourier:
         for v in vectors:
             self.counts["adjoint"] += 1
             components = np.stack([np.sum(v * e_theta, axis=1), np.sum(v * e_phi, axis=1)])
-            alm = self._sht.adjoint_synthesis_general(map=components, spin=1, mode="DERIV1", **self._options())
+            alm = self._sht.adjoint_synthesis_general(
+                map=components, spin=1, mode="DERIV1", **self._options(adjoint=True)
+            )
             results.append(alm[0])
         return results
