@@ -63,6 +63,50 @@ def test_render_sphere_points(tmp_path):
     assert '"MultiPoint"' in (tmp_path / "g.geojson").read_text()
 
 
+def circle_table(path):
+    """``(layer label, fill, cx, cy, r)`` of every circle of an SVG, in document order."""
+    import re
+
+    rows = []
+    for head, body in re.findall(r"(<g [^>]*>)(.*?)</g>", path.read_text(), flags=re.S):
+        label, fill = re.search(r'inkscape:label="([^"]*)"', head).group(1), re.search(r'fill="([^"]*)"', head).group(1)
+        for cx, cy, r in re.findall(r'cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"', body):
+            rows.append((label, fill, float(cx), float(cy), float(r)))
+    return rows
+
+
+def test_render_of_a_colour_run_redraws_its_inks(tmp_path):
+    """A layered CSV's dots keep their inks: with --like the colour image, the same layers, colours and
+    tone-true radii as the colour command's own SVG, and its PNG; without, each layer in its ink's colour (they
+    were drawn as one black layer)."""
+    pixels = np.zeros((12, 16, 3), dtype=np.uint8)
+    pixels[:, :8], pixels[:, 8:] = (230, 40, 40), (40, 110, 110)
+    image = tmp_path / "flag.png"
+    Image.fromarray(pixels).save(image)
+    own = [tmp_path / name for name in ("dots.csv", "dots.svg", "dots.png")]
+    arguments = ["colour", image, "-M", 300, "--iterations", 15, "-q", "--png-width", 160]
+    assert run(arguments + [item for path in own for item in ("-o", path)]).exit_code == 0
+    again = [tmp_path / name for name in ("again.svg", "again.png")]
+    result = run(["render", own[0], "--like", image, "--png-width", 160, "-o", again[0], "-o", again[1]])
+    assert result.exit_code == 0, result.output
+    first, second = circle_table(own[1]), circle_table(again[0])
+    assert [row[:2] for row in first] == [row[:2] for row in second]
+    np.testing.assert_allclose([row[2:] for row in first], [row[2:] for row in second], rtol=1e-3, atol=2e-4)
+    difference = np.abs(np.asarray(Image.open(own[2]), float) - np.asarray(Image.open(again[1]), float))
+    assert difference.mean() < 1.0
+    plain = tmp_path / "plain.svg"
+    assert run(["render", own[0], "-o", plain]).exit_code == 0
+    fills = {label.split("-", 1)[1]: fill for label, fill, *_ in circle_table(plain)}
+    assert fills == {"cyan": "#00ffff", "magenta": "#ff00ff", "yellow": "#ffff00", "black": "#000000"}
+
+
+def test_render_refuses_a_video_csv_in_one_line(tmp_path):
+    frames = tmp_path / "video.csv"
+    frames.write_text("frame,x,y\n0,1.5,2.5\n1,1.6,2.5\n")
+    result = run(["render", frames, "-o", tmp_path / "x.svg"])
+    assert result.exit_code == 1 and "a video's dots" in result.output and "Traceback" not in result.output
+
+
 def test_render_rejects_unknown_csv(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("a,b\n1,2\n")

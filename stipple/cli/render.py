@@ -38,9 +38,15 @@ from .supervise import guarded_files, plot_order, write_outputs
 )
 @click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
 @click.option("--invert", is_flag=True, help="Draw white dots on black.")
+@click.option(
+    "--palette",
+    default=None,
+    help="Layered points (a CSV with a layer column, as stipple colour writes): the palette of --like's separation "
+    "(default: the inks the layers are named by; pens named by colour in the order they appear).",
+)
 @look_options
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
-def render(points_source, outputs, like, size, coords, projection, view, **options):
+def render(points_source, outputs, like, size, coords, projection, view, palette, **options):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     import numpy as np
 
@@ -57,7 +63,13 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
         angles = parse_view(view)
         formats = [output_format(path) for path in outputs]
         with guarded_files([("points", points_source), ("--like image", like)], outputs):
-            domain, points = read_points(points_source)
+            domain, points, names = read_points(points_source, labels=True)
+            if names is not None:
+                files = redraw(points, names, formats, like, size, palette, options)
+                write_outputs(outputs, files)
+                return
+            if palette is not None:
+                raise StippleError("--palette is for layered points (a CSV with a layer column)")
             if domain == "sphere":
                 check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
                 points = plot_order(points, points, options, "radians")
@@ -74,3 +86,22 @@ def render(points_source, outputs, like, size, coords, projection, view, **optio
             write_outputs(outputs, torus_files(unit, shape, formats, settings, darkness))
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+
+
+def redraw(pixels, names, formats, like, size, palette, options):
+    """The files of layered torus points (``stipple.pipelines.colour.redraw_layers``)."""
+    from ..colour import parse_palette
+    from ..pipelines.colour import redraw_layers
+    from ..pipelines.inputs import torus_canvas
+
+    if options["invert"] or options.get("color") is not None or options.get("background") is not None:
+        raise StippleError("--invert, --color and --background are for one-colour dots; inks print on white paper")
+    if like is not None and size is not None:
+        raise StippleError("give --like or --size, not both")
+    draw = render_settings(options)
+    draw.pop("color")
+    shape = None
+    if like is None:
+        shape, _, pixels = torus_canvas(pixels, None, size)
+    palette = None if palette is None else parse_palette(palette)
+    return redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])

@@ -74,6 +74,11 @@ def read_table(source, max_rows, labels=False):
     data = read_source(sys.stdin.buffer if source == "-" else source)
     first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
     columns = {column.strip().lower() for column in first_line.split(",")}
+    if "frame" in columns:
+        raise StippleError(
+            f"{name}: a video's dots, every frame's (a frame column); keep one frame's rows, e.g. "
+            f"awk -F, 'NR == 1 || $1 == 12' {name}"
+        )
 
     def table(names):
         stream = io.BytesIO(data)

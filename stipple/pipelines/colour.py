@@ -5,10 +5,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import colour_problem, print_target
+from ..colour import INK_COLOURS, colour_problem, palette_label, print_target, separate
+from ..errors import StippleError
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_canvas, default_png_width
+from ..io.units import parse_colour
 from ..render.pen import pen_order, physical_centres
 from .image import ImageOutputs
 from .outputs import layered_files
@@ -90,3 +92,52 @@ def ordered_layers(placed, shape, width):
             travel.append((before, after))
         ordered.append((name, colour, points))
     return ordered, travel
+
+
+def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palette=None, black=1.0, order=False):
+    """Saved layered dots drawn again (``stipple render`` of a ``stipple colour`` CSV): ``pixels`` ``(M, 2)`` and
+    each dot's layer name, each layer in its ink's colour (``cyan`` ... ``black``, or a pen named by its colour).
+
+    With ``like``, the colour image the dots were made from, the canvas is its own and the dots are drawn
+    tone-true to its separation into ``palette`` (default: the inks the names are, ``layer_palette``);
+    without it, on ``shape = (H, W)`` in the plotter style. ``order`` sorts each layer along a short pen path.
+    """
+    inks = list(dict.fromkeys(names.tolist()))
+    palette = layer_palette(inks) if palette is None else palette
+    tone = {}
+    if like is not None:
+        rgb = load_colour(like)
+        shape = rgb.shape[:2]
+        layers = {layer.name: layer for layer in separate(rgb, palette, black)}
+        unknown = [name for name in inks if name not in layers]
+        if unknown:
+            raise StippleError(
+                f"layers {', '.join(unknown)} are not inks of the palette {palette_label(palette)} of {like} "
+                f"(its inks: {', '.join(layers)}); give --palette"
+            )
+        coverages = [np.clip(layers[name].density, 0.0, 1.0) for name in inks]
+        ink = sum(layer.density for layer in layers.values()).mean()
+        tone = {"coverages": coverages, "target": print_target(rgb, palette), "ink": ink}
+    if ".png" in formats:
+        check_png_canvas(shape[::-1], draw["png_width"] or default_png_width(len(pixels)), layers=INK_PICTURE_LAYERS)
+    rows, columns = shape
+    unit = np.mod(np.asarray(pixels) / np.array([columns, rows]), 1.0)
+    placed = [(name, ink_colour(name), unit[names == name]) for name in inks]
+    if order:
+        placed, _ = ordered_layers(placed, shape, draw["width"])
+    return layered_files(placed, shape, formats, draw, **tone)
+
+
+def layer_palette(names):
+    """The palette that layer ``names`` come from: "gray" for black alone, "cmyk" for inks of it, else pens named
+    by their colours in the order given."""
+    if set(names) == {"black"}:
+        return "gray"
+    if set(names) <= set(INK_COLOURS):
+        return "cmyk"
+    return [(name, ink_colour(name)) for name in names]
+
+
+def ink_colour(name):
+    """An ink's colour (RGB in [0, 1]) by its name: a process ink, or a pen's colour as written."""
+    return INK_COLOURS.get(name) or parse_colour(name, f"layer {name!r}: a layer name")
