@@ -58,6 +58,21 @@ def test_an_inverted_line_is_drawn_white_on_black(ramp_path, tmp_path):
     assert 'fill="#000000"' in text and 'stroke="#ffffff"' in text
 
 
+def test_the_default_stroke_draws_the_image_tone(ramp_path, tmp_path):
+    """Without --pen-width the stroke is the one whose ink covers the image's mean darkness: the drawing's tone
+    follows the ramp's (a 1-pixel stroke drew a 3:1 photo at 0.29 too light on average)."""
+    png = tmp_path / "line.png"
+    result = run(["line", ramp_path, "-M", 600, "--iterations", 80, "-q", "-o", png])
+    assert result.exit_code == 0, result.output
+    drawn = 1 - np.asarray(Image.open(png).convert("L"), dtype=float) / 255
+    darkness = 1 - np.asarray(Image.open(ramp_path), dtype=float) / 255
+    assert abs(drawn.mean() - darkness.mean()) < 0.04, (drawn.mean(), darkness.mean())
+    columns = drawn.shape[1]
+    middle = [drawn[:, k * columns // 4 : (k + 1) * columns // 4].mean() for k in (1, 2)]
+    wanted = [darkness[:, k * 12 : (k + 1) * 12].mean() for k in (1, 2)]
+    assert np.allclose(middle, wanted, atol=0.08), (middle, wanted)
+
+
 def test_evaluate_a_line(ramp_path, tmp_path):
     csv = tmp_path / "line.csv"
     assert run(["line", ramp_path, "-M", 300, "--iterations", 40, "-q", "-o", csv]).exit_code == 0

@@ -65,6 +65,7 @@ def line(ctx, image, **options):
                 width=width,
                 pen_width=pen_width,
                 png_width=options["png_width"],
+                ink=float(weights.mean()),
                 **colours,
             )
             write_outputs(options["outputs"], files)

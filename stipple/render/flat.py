@@ -83,24 +83,40 @@ def layered_drawing(
     )
 
 
-def line_drawing(points, shape, *, width=(200.0, "mm"), pen_width=None, png_width=None, color=BLACK, background=WHITE):
+def line_drawing(
+    points, shape, *, width=(200.0, "mm"), pen_width=None, png_width=None, color=BLACK, background=WHITE, ink=None
+):
     """The ``Drawing`` of a closed curve (vertices in unit coordinates, path order) for an image of ``shape``: one
-    closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``, default one input pixel)
-    in ``color`` on ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default:
-    the input's width × 4)."""
+    closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``) in ``color`` on
+    ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default: the input's width
+    × 4). Without ``pen_width`` the stroke is ``tone_stroke`` for ``ink``, the density's mean (one input pixel
+    without it)."""
     rows, columns = shape
     pixels = np.asarray(points) * np.array([columns, rows])
-    stroke = 1.0 if pen_width is None else to_user_units(pen_width, width, columns)
+    if pen_width is not None:
+        stroke = to_user_units(pen_width, width, columns)
+    else:
+        stroke = 1.0 if ink is None else tone_stroke(pixels, shape, ink)
     return Drawing(
         (columns, rows),
         width,
         png_width or 4 * columns,
-        notes=(f"one closed line, {len(pixels)} vertices",),
+        notes=(f"one closed line, {len(pixels)} vertices, stroke {stroke:.3g} px",),
         background=tuple(background),
         line=pixels,
         stroke=stroke,
         line_colour=tuple(color),
     )
+
+
+def tone_stroke(pixels, shape, ink):
+    """The stroke width (pixels) whose ink along the closed line through ``pixels`` covers ``ink`` of the image:
+    ``ink W H / length``. The line's length per area follows the density, so the drawn tone follows it too, to
+    where strokes touch (at density 1). A 1-pixel stroke drew the 3:1 panorama of the held-out sweep at mean
+    0.29 too light (darkest tenth 0.51 for 0.06)."""
+    rows, columns = shape
+    length = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1).sum()
+    return float(ink) * rows * columns / length if length > 0 else 1.0
 
 
 def with_pen_paths(layers, dot_style, pen):
