@@ -103,10 +103,13 @@ def test_line_resumes_from_its_checkpoint(ramp_path, tmp_path):
         (["-M", 100, "--length", -5], "--length must be in [16, "),
         (["-M", 100, "-o", "x.geojson"], "GeoJSON output is for sphere points"),
         (["-M", 100, "--epsilon", 0], "epsilon must be"),
+        (["-M", 100, "--init", "square.csv"], "--init square.csv: 4 vertices, but -M is 100"),
+        (["-M", 4, "--init", "square.csv"], "vertices must lie in the image, 0..48 by 0..32 pixels"),
     ],
 )
 def test_line_bad_input(ramp_path, tmp_path, args, message, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "square.csv").write_text("x,y\n2,2\n60,2\n40,20\n2,20\n")
     result = run(["line", ramp_path, "--iterations", 2, "-q"] + args)
     assert result.exit_code == 1 and message in result.output, result.output
 

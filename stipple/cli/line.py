@@ -35,7 +35,6 @@ def line(ctx, image, **options):
     from ..io.units import BLACK, WHITE, parse_length
     from ..line import line_points
     from ..line.problem import line_settings
-    from ..pipelines.inputs import read_torus_init
     from ..pipelines.outputs import line_files
 
     started = time.perf_counter()
@@ -53,7 +52,7 @@ def line(ctx, image, **options):
             )
             check_count(options["n_points"])
             line_settings(weights, options["n_points"], options["length"], options["bandwidth"], OPTION_NAMES)
-            init = None if options["init"] is None else read_torus_init(options["init"], weights.shape)
+            init = None if options["init"] is None else read_line_init(options["init"], weights.shape, options)
             result, stopped_by = solve_line(weights, options, init)
             points = line_points(result.points)
             formats = [output_format(path) for path in options["outputs"]]
@@ -72,6 +71,27 @@ def line(ctx, image, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+def read_line_init(source, shape, options):
+    """``--init``'s vertices (a CSV ``x,y`` in pixels, path order) in unit coordinates: exactly ``-M`` of them,
+    inside the image."""
+    import numpy as np
+
+    from ..pipelines.inputs import read_points
+
+    domain, pixels = read_points(source)
+    rows, columns = shape
+    if domain != "torus":
+        raise StippleError(f"--init {source}: the line's start needs a CSV with columns x,y (pixels)")
+    if len(pixels) != options["n_points"]:
+        raise StippleError(
+            f"--init {source}: {len(pixels)} vertices, but -M is {options['n_points']}: give one row per vertex "
+            "(-M of them, in path order)"
+        )
+    if np.any(pixels < 0) or np.any(pixels > [columns, rows]):
+        raise StippleError(f"--init {source}: vertices must lie in the image, 0..{columns} by 0..{rows} pixels")
+    return pixels / np.array([columns, rows])
 
 
 def solve_line(weights, options, init):
