@@ -97,7 +97,10 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     unknown = sorted(set(names.tolist()) - {layer.name for layer in layers})
     if unknown:
         inks = ", ".join(layer.name for layer in layers)
-        raise StippleError(f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} ({inks})")
+        raise StippleError(
+            f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} for {input_source} (its "
+            f"inks there: {inks}): is it the colour image the points were made from, with their palette?"
+        )
     rows, columns = rgb.shape[:2]
     unit = np.mod(pixels / np.array([columns, rows]), 1.0)
     union = sum(layer.density for layer in layers)

@@ -112,8 +112,9 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
         unknown = [name for name in inks if name not in layers]
         if unknown:
             raise StippleError(
-                f"layers {', '.join(unknown)} are not inks of the palette {palette_label(palette)} of {like} "
-                f"(its inks: {', '.join(layers)}); give --palette"
+                f"layers {', '.join(unknown)} are not inks of --palette {palette_label(palette)} for {like} (its "
+                f"inks there: {', '.join(layers)}): is it the colour image the points were made from, with their "
+                "palette?"
             )
         coverages = [np.clip(layers[name].density, 0.0, 1.0) for name in inks]
         ink = sum(layer.density for layer in layers.values()).mean()
