@@ -85,6 +85,21 @@ def test_auto_on_the_command_line(tmp_path):
 
 
 @pytest.mark.parametrize(
+    "style, noted",
+    [(["--dot-style", "filled"], True), (["--style", "plotter"], True), ([], False)],
+)
+def test_a_given_count_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp_path, style, noted):
+    """-M auto says that tones darker than the no-touch packing's come out lighter; a given -M did not (a dark
+    photo drawn with filled pen dots: its darkest tenth 0.44 for 0.9, silently)."""
+    image = flat_gray(tmp_path, 0.8)
+    arguments = ["torus", str(image), "-M", "200", "--iterations", "3", *style, "-o", str(tmp_path / "out.svg")]
+    result = CliRunner().invoke(main, arguments)
+    assert result.exit_code == 0, result.output
+    line = f"tones darker than {reachable_tone('filled'):.0%} will be lighter"
+    assert (line in result.output) == noted, result.output
+
+
+@pytest.mark.parametrize(
     "extra, message",
     [
         ([], "pen dot style"),

@@ -85,10 +85,15 @@ FAINT_SPAN, DARK_MEAN = 0.6, 0.75
 
 
 def tone_hints(weights, options):
-    """One line each for a faint or a mostly dark input, unless --quiet, --levels or --invert was given."""
-    if options["quiet"] or options["levels"] is not None or options["invert"]:
+    """One line each for a faint or a mostly dark input, unless --quiet, --levels or --invert was given, and for
+    tones that the plotter style cannot reach (unless --quiet; -M auto says it itself)."""
+    if options["quiet"]:
         return
     import numpy as np
+
+    pen_reach_hint(weights, options)
+    if options["levels"] is not None or options["invert"]:
+        return
 
     low, high = np.percentile(weights, [0.5, 99.5])
     # A page of one gray with small marks (the same value at both percentiles) has nothing for --levels auto.
@@ -102,5 +107,26 @@ def tone_hints(weights, options):
         click.echo(
             f"stipple: note: the image is {weights.mean():.0%} dark on average; drawn dark as it is (--invert draws "
             "its light parts as white dots on black: docs/picture.md)",
+            err=True,
+        )
+
+
+def pen_reach_hint(weights, options):
+    """A line when the plotter style (or a pen's dot style) draws a given -M: its dots never touch, so tones
+    darker than ``stipple.render.pen_count.reachable_tone`` come out lighter (a dark photo's darkest tenth 0.44
+    for 0.9), which -M auto says and an explicit -M did not."""
+    from ..render.pen_count import PEN_STYLES, reachable_tone
+
+    pen = options["dot_style"] in PEN_STYLES
+    if options["n_points"] == "auto" or not (pen or options["style"] == "plotter"):
+        return
+    import numpy as np
+
+    reachable = reachable_tone(options["dot_style"] if pen else "filled")
+    darkest = float(np.percentile(weights, 99))
+    if darkest > reachable:
+        click.echo(
+            f"stipple: note: tones darker than {reachable:.0%} will be lighter: the plotter style's dots never touch "
+            f"(the image's darkest 1 % is {darkest:.0%} dark; the default tone style with discs draws them)",
             err=True,
         )
