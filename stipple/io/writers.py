@@ -33,26 +33,11 @@ def drawing_bytes(drawing, fmt):
 
 def _line_bytes(drawing, fmt):
     """SVG or PNG bytes of a drawing of one closed line."""
+    colours = {"colour": drawing.line_colour, "background": drawing.background}
     if fmt == ".svg":
         comment = drawing.notes[0] if drawing.notes else ""
-        return line_svg_bytes(
-            drawing.line,
-            drawing.size,
-            drawing.width,
-            drawing.stroke,
-            comment=comment,
-            colour=drawing.line_colour,
-            background=drawing.background,
-        )
-    picture = render_line(
-        drawing.line,
-        drawing.size,
-        drawing.png_width,
-        drawing.stroke,
-        colour=drawing.line_colour,
-        background=drawing.background,
-    )
-    return png_bytes(picture)
+        return line_svg_bytes(drawing.line, drawing.size, drawing.width, drawing.stroke, comment=comment, **colours)
+    return png_bytes(render_line(drawing.line, drawing.size, drawing.png_width, drawing.stroke, **colours))
 
 
 def _outline(box):
