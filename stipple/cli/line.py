@@ -6,7 +6,7 @@ import click
 
 from ..errors import StippleError
 from .defaults import LINE_ITERATIONS
-from .options import common_options, is_default, resolve_input, without
+from .options import common_options, resolve_input, without
 from .supervise import finish, guarded_files, supervised, write_outputs
 
 # How the line's settings are spelt in messages: the options typed.
@@ -14,9 +14,15 @@ OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
 
 
 @click.command()
+@click.option(
+    "--pen-width",
+    default=None,
+    help="Stroke width of the line, e.g. 0.3mm (default: the tone-true stroke, whose ink covers the image's mean "
+    "darkness; docs/line.md).",
+)
 # The line is drawn with one pen, black on white (--invert: white on black): the dot options and the dots' near
 # field would do nothing.
-@without("near_field", "safeguard", "dot_radius", "order", "background", "color", "dot_style", "style")
+@without("near_field", "safeguard", "dot_radius", "order", "background", "color", "dot_style", "style", "pen_width")
 @click.argument("image", required=False)
 @common_options(iterations=LINE_ITERATIONS, settle=False)
 @click.option(
@@ -43,8 +49,7 @@ def line(ctx, image, **options):
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         width = parse_length(options["width"])
-        # The line's own default stroke is one input pixel, unless --pen-width is given.
-        pen_width = None if is_default(ctx, "pen_width") else parse_length(options["pen_width"], "pen-width")
+        pen_width = None if options["pen_width"] is None else parse_length(options["pen_width"], "pen-width")
         inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
         with guarded_files(inputs, options["outputs"], options["checkpoint"]):
             weights = load_input(
