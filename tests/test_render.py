@@ -100,6 +100,15 @@ def test_render_of_a_colour_run_redraws_its_inks(tmp_path):
     assert fills == {"cyan": "#00ffff", "magenta": "#ff00ff", "yellow": "#ffff00", "black": "#000000"}
 
 
+def test_render_warns_when_points_lie_outside_the_canvas_given(torus_csv, tmp_path):
+    """Points made for another image are wrapped onto the canvas of --size or --like: drawn, with a warning."""
+    image, points = torus_csv
+    smaller = run(["render", points, "--size", "12,8", "-o", tmp_path / "x.svg"])
+    assert smaller.exit_code == 0 and "points lie outside the 12×8 image" in smaller.output
+    same = run(["render", points, "--like", image, "-o", tmp_path / "y.svg"])
+    assert same.exit_code == 0 and "outside" not in same.output
+
+
 def test_render_refuses_a_video_csv_in_one_line(tmp_path):
     frames = tmp_path / "video.csv"
     frames.write_text("frame,x,y\n0,1.5,2.5\n1,1.6,2.5\n")

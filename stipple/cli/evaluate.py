@@ -8,7 +8,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import commit_outputs
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
-from .options import check_extension, check_longitude, parse_levels
+from .options import check_extension, check_longitude, parse_levels, warn_outside
 from .supervise import guarded_files
 
 
@@ -130,7 +130,8 @@ def evaluate(
             report = evaluation_report(
                 domain, points, names, input_source, bandwidth=bandwidth, kernel=kernel, as_line=as_line, **options
             )
-            warn_outside(report)
+            count, size = report.get("points_outside", 0), report.get("image_size")
+            warn_outside(count, report["points"], size, "the measures wrap them around")
             files = []
             if spectrum_path is not None:
                 spectrum = report["spectrum"]
@@ -154,18 +155,6 @@ def check_builtin(input_source):
     name = str(input_source).partition(":")[2]
     if name not in BUILTINS:
         raise StippleError(f"unknown builtin {name!r}: choose from {', '.join('builtin:' + b for b in BUILTINS)}")
-
-
-def warn_outside(report):
-    """A warning on stderr when points lie outside the image they are measured against."""
-    count = report.get("points_outside", 0)
-    if count:
-        columns, rows = report["image_size"]
-        click.echo(
-            f"stipple: warning: {count} of {report['points']} points lie outside the {columns}×{rows} image "
-            "(made for another image?); the measures wrap them around",
-            err=True,
-        )
 
 
 def check_picture_options_absent(sigmas, colour, levels, inset, fs_dots):

@@ -355,3 +355,15 @@ def check_extension(option, path, extension):
     """Refuse a report file whose name does not end in ``extension`` (``-`` is stdout)."""
     if path not in (None, "-") and not str(path).lower().endswith(extension):
         raise StippleError(f"{path}: {option} writes {extension} files; the name must end in {extension}")
+
+
+def warn_outside(count, total, size, consequence):
+    """A warning on stderr when ``count`` of ``total`` points lie outside the ``size = (W, H)`` image they are used
+    with (points made for another image, which the torus wraps around), ending with ``consequence``."""
+    if count:
+        columns, rows = size
+        click.echo(
+            f"stipple: warning: {count} of {total} points lie outside the {columns}×{rows} image "
+            f"(made for another image?); {consequence}",
+            err=True,
+        )

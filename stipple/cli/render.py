@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import look_options, parse_view, render_settings
+from .options import look_options, parse_view, render_settings, warn_outside
 from .supervise import guarded_files, plot_order, write_outputs
 
 
@@ -79,7 +79,10 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
                 )
                 write_outputs(outputs, files)
                 return
-            shape, darkness, points = torus_canvas(points, like, size, options["invert"])
+            shape, darkness, wrapped = torus_canvas(points, like, size, options["invert"])
+            if like is not None or size is not None:
+                warn_beyond(points, shape, options)
+            points = wrapped
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
@@ -91,6 +94,7 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
 def redraw(pixels, names, formats, like, size, palette, options):
     """The files of layered torus points (``stipple.pipelines.colour.redraw_layers``)."""
     from ..colour import parse_palette
+    from ..io.images import load_colour
     from ..pipelines.colour import redraw_layers
     from ..pipelines.inputs import torus_canvas
 
@@ -101,7 +105,23 @@ def redraw(pixels, names, formats, like, size, palette, options):
     draw = render_settings(options)
     draw.pop("color")
     shape = None
-    if like is None:
-        shape, _, pixels = torus_canvas(pixels, None, size)
+    if like is not None:
+        like = load_colour(like)
+        warn_beyond(pixels, like.shape[:2], options)
+    else:
+        shape, _, wrapped = torus_canvas(pixels, None, size)
+        if size is not None:
+            warn_beyond(pixels, shape, options)
+        pixels = wrapped
     palette = None if palette is None else parse_palette(palette)
     return redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])
+
+
+def warn_beyond(pixels, shape, options):
+    """A warning for points outside the ``shape = (H, W)`` canvas of ``--like`` or ``--size`` (they are drawn
+    wrapped onto it)."""
+    if options["quiet"]:
+        return
+    rows, columns = shape
+    beyond = (pixels < 0).any(axis=1) | (pixels[:, 0] > columns) | (pixels[:, 1] > rows)
+    warn_outside(int(beyond.sum()), len(pixels), (columns, rows), "drawn wrapped onto it")

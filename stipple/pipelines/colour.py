@@ -98,7 +98,8 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
     """Saved layered dots drawn again (``stipple render`` of a ``stipple colour`` CSV): ``pixels`` ``(M, 2)`` and
     each dot's layer name, each layer in its ink's colour (``cyan`` ... ``black``, or a pen named by its colour).
 
-    With ``like``, the colour image the dots were made from, the canvas is its own and the dots are drawn
+    With ``like``, the colour image the dots were made from (a path or its ``(H, W, 3)`` colours), the canvas is
+    its own and the dots are drawn
     tone-true to its separation into ``palette`` (default: the inks the names are, ``layer_palette``);
     without it, on ``shape = (H, W)`` in the plotter style. ``order`` sorts each layer along a short pen path.
     """
@@ -106,13 +107,13 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
     palette = layer_palette(inks) if palette is None else palette
     tone = {}
     if like is not None:
-        rgb = load_colour(like)
+        rgb = like if isinstance(like, np.ndarray) else load_colour(like)
         shape = rgb.shape[:2]
         layers = {layer.name: layer for layer in separate(rgb, palette, black)}
         unknown = [name for name in inks if name not in layers]
         if unknown:
             raise StippleError(
-                f"layers {', '.join(unknown)} are not inks of --palette {palette_label(palette)} for {like} (its "
+                f"layers {', '.join(unknown)} are not inks of --palette {palette_label(palette)} for the image (its "
                 f"inks there: {', '.join(layers)}): is it the colour image the points were made from, with their "
                 "palette?"
             )
