@@ -130,3 +130,13 @@ def test_map_from_stdin(map_path):
     result = run(["sphere", "-", "-M", 50, "-N", 6, "--iterations", 1, "-q"], input=map_path.read_bytes())
     assert result.exit_code == 0, result.output
     assert len(result.stdout.splitlines()) == 51
+
+
+@pytest.mark.parametrize(("shape", "noted"), [((20, 40), False), ((20, 41), False), ((20, 60), True), ((20, 20), True)])
+def test_a_map_that_is_not_two_to_one_gets_a_note(tmp_path, shape, noted):
+    """An equirectangular map spans 360 by 180 degrees; another shape is read as one all the same (stretched)."""
+    path = tmp_path / "map.npy"
+    np.save(path, np.random.default_rng(0).random(shape) + 0.5)
+    result = run(["sphere", str(path), "-M", "100", "--iterations", "2", "-o", str(tmp_path / "x.csv")])
+    assert result.exit_code == 0, result.output
+    assert ("not 2:1" in result.output) == noted, result.output

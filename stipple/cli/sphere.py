@@ -74,6 +74,7 @@ def sphere(ctx, map_source, **options):
                 value_range=options["value_range"],
                 lon0=lon0,
             )
+            warn_aspect(density, map_source, options)
             problem = sphere_problem(
                 density,
                 options["n_points"],
@@ -103,3 +104,22 @@ def sphere(ctx, map_source, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+# An equirectangular map spans 360 by 180 degrees: 2:1, to two columns or 2 % of them.
+MAP_ASPECT_TOLERANCE = 0.02
+
+
+def warn_aspect(density, source, options):
+    """A note on stderr for a map that is not 2:1: it is read as 360 by 180 degrees all the same, so its pixels are
+    stretched on the globe (a 3:1 panorama's features come out 1.5 times as tall)."""
+    values = getattr(density, "values", None)
+    if options["quiet"] or values is None:
+        return
+    rows, columns = values.shape
+    if abs(columns - 2 * rows) > max(2, MAP_ASPECT_TOLERANCE * columns):
+        click.echo(
+            f"stipple: note: {source} is {columns}×{rows}, not 2:1; read as an equirectangular map of 360° by "
+            "180°, so its features are stretched on the globe",
+            err=True,
+        )
