@@ -99,9 +99,9 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
     each dot's layer name, each layer in its ink's colour (``cyan`` ... ``black``, or a pen named by its colour).
 
     With ``like``, the colour image the dots were made from (a path or its ``(H, W, 3)`` colours), the canvas is
-    its own and the dots are drawn
-    tone-true to its separation into ``palette`` (default: the inks the names are, ``layer_palette``);
-    without it, on ``shape = (H, W)`` in the plotter style. ``order`` sorts each layer along a short pen path.
+    its own and the dots are drawn tone-true to its separation into ``palette`` (default: the inks the names are,
+    ``layer_palette``); without it, on ``shape = (H, W)`` in the plotter style. ``order`` sorts each layer along
+    a short pen path.
     """
     inks = list(dict.fromkeys(names.tolist()))
     palette = layer_palette(inks) if palette is None else palette
