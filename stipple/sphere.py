@@ -216,10 +216,10 @@ def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, 
     target = density.coefficients(bandwidth, threads)
     degrees, _ = alm_degrees_orders(bandwidth)
     kernel_coeffs = sphere_kernel(kernel, degrees)
-    # The pairs run beside the adjoints on their share of the threads, the adjoints on the rest (one of two, whose
-    # order of addition is then fixed): the same bits every run for a thread count; the syntheses keep every thread.
+    # The adjoints run on one thread (their order of addition is then fixed: the same bits every run for a thread
+    # count), beside the pairs on their share of the threads; the syntheses keep every thread.
     pair_threads = pair_share(threads) if near_field else 0
-    fourier = SphereFourier(bandwidth, epsilon, threads, adjoint_threads=threads - pair_threads)
+    fourier = SphereFourier(bandwidth, epsilon, threads, adjoint_threads=1)
     weight = target[0].real * np.sqrt(4 * np.pi) / n_points
     if not near_field:
         discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
