@@ -80,10 +80,10 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
                 write_outputs(outputs, files)
                 return
             shape, darkness, wrapped = torus_canvas(points, like, size, options["invert"])
+            check_png_outputs(formats, shape[::-1], png_width, len(points))
             if like is not None or size is not None:
                 warn_beyond(points, shape, options)
             points = wrapped
-            check_png_outputs(formats, shape[::-1], png_width, len(points))
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
             write_outputs(outputs, torus_files(unit, shape, formats, settings, darkness))
@@ -104,17 +104,16 @@ def redraw(pixels, names, formats, like, size, palette, options):
         raise StippleError("give --like or --size, not both")
     draw = render_settings(options)
     draw.pop("color")
-    shape = None
+    shape, given = None, pixels
     if like is not None:
         like = load_colour(like)
-        warn_beyond(pixels, like.shape[:2], options)
     else:
-        shape, _, wrapped = torus_canvas(pixels, None, size)
-        if size is not None:
-            warn_beyond(pixels, shape, options)
-        pixels = wrapped
+        shape, _, pixels = torus_canvas(pixels, None, size)
     palette = None if palette is None else parse_palette(palette)
-    return redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])
+    files = redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])
+    if like is not None or size is not None:
+        warn_beyond(given, like.shape[:2] if like is not None else shape, options)
+    return files
 
 
 def warn_beyond(pixels, shape, options):
