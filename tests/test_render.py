@@ -109,11 +109,21 @@ def test_render_warns_when_points_lie_outside_the_canvas_given(torus_csv, tmp_pa
     assert same.exit_code == 0 and "outside" not in same.output
 
 
-def test_render_refuses_a_video_csv_in_one_line(tmp_path):
+def test_render_refuses_a_video_csv_of_several_frames_and_draws_one_frame(tmp_path):
+    """A video's CSV holds every frame's dots: refused in one line that names its frames and how to keep one; the
+    command it gives makes a file that renders."""
+    import shlex
+
     frames = tmp_path / "video.csv"
-    frames.write_text("frame,x,y\n0,1.5,2.5\n1,1.6,2.5\n")
+    frames.write_text("frame,x,y\n3,1.5,2.5\n3,4.0,5.0\n4,1.6,2.5\n4,4.1,5.0\n")
     result = run(["render", frames, "-o", tmp_path / "x.svg"])
-    assert result.exit_code == 1 and "a video's dots" in result.output and "Traceback" not in result.output
+    assert result.exit_code == 1 and "a video's dots of 2 frames (3 to 4)" in result.output
+    assert "Traceback" not in result.output
+    advice = result.output.split("e.g. ", 1)[1].strip()
+    subprocess.run(advice, shell=True, check=True, cwd=tmp_path)
+    kept = tmp_path / "frame3.csv"
+    assert run(["render", kept, "-o", tmp_path / "y.csv"]).exit_code == 0
+    assert (tmp_path / "y.csv").read_text().count("\n") == 3 and shlex.split(advice)[0] == "awk"
 
 
 def test_render_rejects_unknown_csv(tmp_path):

@@ -74,11 +74,6 @@ def read_table(source, max_rows, labels=False):
     data = read_source(sys.stdin.buffer if source == "-" else source)
     first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
     columns = {column.strip().lower() for column in first_line.split(",")}
-    if "frame" in columns:
-        raise StippleError(
-            f"{name}: a video's dots, every frame's (a frame column); keep one frame's rows, e.g. "
-            f"awk -F, 'NR == 1 || $1 == 12' {name}"
-        )
 
     def table(names):
         stream = io.BytesIO(data)
@@ -87,6 +82,9 @@ def read_table(source, max_rows, labels=False):
         if len(points) > max_rows:
             raise StippleError(f"{name}: {len(points)} points; at most {max_rows} are read")
         return points
+
+    if "frame" in columns:
+        one_frame(table(("frame",))[:, 0], name)
 
     if {"x", "y", "z"} <= columns:
         found = "xyz", unit_rows(table(("x", "y", "z")), name)
@@ -110,6 +108,18 @@ def read_table(source, max_rows, labels=False):
             return "xy", pixels
         return "xy", pixels, read_labels(data, columns, len(pixels), name)
     raise StippleError(f"{name}: expected a CSV with header x,y (torus) or lon,lat / x,y,z (sphere)")
+
+
+def one_frame(frames, name):
+    """Refuse a video's dots of several frames (a ``frame`` column with more than one value): their points
+    together are no one picture's. One frame's rows are read as they are."""
+    numbers = np.unique(frames)
+    if len(numbers) > 1:
+        first = f"{numbers[0]:g}"
+        raise StippleError(
+            f"{name}: a video's dots of {len(numbers)} frames ({first} to {numbers[-1]:g}); keep one frame's rows, "
+            f"e.g. awk -F, 'NR == 1 || $1 == {first}' {name} > frame{first}.csv"
+        )
 
 
 def read_labels(data, columns, count, name):
