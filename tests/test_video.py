@@ -385,3 +385,18 @@ def test_a_cut_reruns_the_changed_part_and_leaves_the_still_part_alone():
     problem = torus_problem(clip[2], COUNT, BANDWIDTH, threads=1, near_field=False)
     cold = halftone_torus(clip[2], COUNT, BANDWIDTH, threads=1).points
     assert discrepancy_energy(problem, after) < 1.3 * discrepancy_energy(problem, cold)
+
+
+def test_a_colour_pan_taken_for_a_cut_stops_where_a_cold_run_would():
+    """A frame whose change passes ``CUT`` runs under the cold run's stopping rule: --tol of the gradient norm at
+    i.i.d. samples. Taken relative to its warm start's far smaller norm (a fast pan's frames start close to their
+    minimum), the colour frames of a pan ran longer than the cold frame itself."""
+    rng = np.random.default_rng(5)
+    texture = gaussian_filter(rng.random((48, 64, 3)), (2, 2, 0), mode="wrap")
+    first = np.clip((texture - texture.min()) / np.ptp(texture) * 1.2 - 0.1, 0, 1)
+    clip = [first, np.roll(first, 3, axis=1)]
+    assert frame_change(*(1 - np.moveaxis(c, -1, 0) for c in clip), COUNT) > CUT
+    frames = []
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1, palette="cmy")
+    stipple_video(enumerate(clip), settings, on_frame=frames.append)
+    assert frames[1].warm and frames[1].iterations < frames[0].iterations, [f.iterations for f in frames]
