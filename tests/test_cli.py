@@ -124,3 +124,12 @@ def test_image_from_stdin(image_path):
     from_stdin = run(args, input=image_path.read_bytes())
     from_file = run(["torus", image_path] + args[2:])
     assert from_stdin.exit_code == 0 and from_stdin.stdout == from_file.stdout
+
+
+@pytest.mark.parametrize(("threads", "shown"), [(1, "threads=1 (transforms 1)"), (2, "threads=2 (transforms 1)")])
+def test_verbose_names_the_threads_asked_for_and_the_transforms_share(image_path, tmp_path, threads, shown):
+    """With the near field the transforms run on half of the threads beside the pairs: -v printed only that share
+    (threads=1 for --threads 2), which read like the option being ignored."""
+    args = ["torus", image_path, "-M", 150, "--iterations", 2, "--threads", threads, "-v", "-o", tmp_path / "d.csv"]
+    result = run(args)
+    assert result.exit_code == 0 and shown in result.output, result.output

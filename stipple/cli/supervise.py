@@ -177,10 +177,13 @@ def announcer(options):
         return None
 
     def announce(problem):
+        from ..halftone import default_threads
+
         fourier = problem.discrepancy.fourier
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
+        threads = options.get("threads") or default_threads()
         click.echo(
-            f"stipple: {details}, threads={fourier.threads}, epsilon={fourier.epsilon:g}, "
+            f"stipple: {details}, threads={threads} (transforms {fourier.threads}), epsilon={fourier.epsilon:g}, "
             f"tol={options['tol']:g}, iterations<={options['iterations']}",
             err=True,
         )
