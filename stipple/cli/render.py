@@ -104,23 +104,21 @@ def redraw(pixels, names, formats, like, size, palette, options):
         raise StippleError("give --like or --size, not both")
     draw = render_settings(options)
     draw.pop("color")
-    shape, given = None, pixels
-    if like is not None:
-        like = load_colour(like)
-    else:
-        shape, _, pixels = torus_canvas(pixels, None, size)
+    like = None if like is None else load_colour(like)
+    # ``redraw_layers`` wraps the points onto the canvas: only ``torus_canvas``'s canvas is needed.
+    shape = like.shape[:2] if like is not None else torus_canvas(pixels, None, size)[0]
     palette = None if palette is None else parse_palette(palette)
     files = redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])
     if like is not None or size is not None:
-        warn_beyond(given, like.shape[:2] if like is not None else shape, options)
+        warn_beyond(pixels, shape, options)
     return files
 
 
 def warn_beyond(pixels, shape, options):
     """A warning for points outside the ``shape = (H, W)`` canvas of ``--like`` or ``--size`` (they are drawn
     wrapped onto it)."""
-    if options["quiet"]:
-        return
-    rows, columns = shape
-    beyond = (pixels < 0).any(axis=1) | (pixels[:, 0] > columns) | (pixels[:, 1] > rows)
-    warn_outside(int(beyond.sum()), len(pixels), (columns, rows), "drawn wrapped onto it")
+    from ..measures.reports import outside
+
+    if not options["quiet"]:
+        found = outside(pixels, shape)
+        warn_outside(found["points_outside"], len(pixels), found["image_size"], "drawn wrapped onto it")

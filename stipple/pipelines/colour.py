@@ -49,7 +49,19 @@ def ink_layers(layers, problem, result):
     placed = [
         (layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, problem.slices, strict=True)
     ]
-    return placed, sum(layer.density for layer in layers).mean()
+    return placed, union_ink(layers)
+
+
+def union_ink(layers):
+    """The mean density of all the inks together: the ink that all the dots lay down."""
+    return sum(layer.density for layer in layers).mean()
+
+
+def tone_settings(layers, rgb, separation):
+    """The tone style's keywords of ``layered_files`` for the inks ``layers`` (in the drawing's layer order) of
+    ``rgb`` separated by ``separation``: each ink's coverage, the colour they print and their mean ink."""
+    coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
+    return {"coverages": coverages, "target": print_target(rgb, separation), "ink": union_ink(layers)}
 
 
 def stipple_colour(image, formats, recipe, *, session=None, announce=None):
@@ -72,13 +84,12 @@ def stipple_colour(image, formats, recipe, *, session=None, announce=None):
     if announce is not None:
         announce(problem)
     result = run(problem, **{**recipe.solve, **(session or {})})
-    placed, ink = ink_layers(layers, problem, result)
+    placed, _ = ink_layers(layers, problem, result)
     shape, travel = rgb.shape[:2], []
     if recipe.order:
         placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
-    coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
-    target = print_target(rgb, settings["separation"])
-    files = layered_files(placed, shape, formats, recipe.draw, ink=ink, coverages=coverages, target=target)
+    tone = tone_settings(layers, rgb, settings["separation"])
+    files = layered_files(placed, shape, formats, recipe.draw, **tone)
     return ImageOutputs(files, result, travel)
 
 
@@ -117,9 +128,7 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
                 f"inks there: {', '.join(layers)}): is it the colour image the points were made from, with their "
                 "palette?"
             )
-        coverages = [np.clip(layers[name].density, 0.0, 1.0) for name in inks]
-        ink = sum(layer.density for layer in layers.values()).mean()
-        tone = {"coverages": coverages, "target": print_target(rgb, palette), "ink": ink}
+        tone = tone_settings([layers[name] for name in inks], rgb, palette)
     if ".png" in formats:
         check_png_canvas(shape[::-1], draw["png_width"] or default_png_width(len(pixels)), layers=INK_PICTURE_LAYERS)
     rows, columns = shape
