@@ -38,9 +38,9 @@ ink across the opposite edge. ``fit_inside`` keeps every dot of a picture that d
 moving the others (``stipple.render.dots.inset`` shrinks the whole drawing, a misregistration of up to one radius
 that a blurred comparison counts as tone error).
 
-Modules: ``radii`` (the radii and ``fit_inside``), ``raster`` (exact drawing of discs), ``inks`` (separations
-for multiplying inks), ``wrap`` (the periodic canvas), ``checks`` (argument checks). The library uses numpy,
-scipy and Pillow only.
+Modules: ``radii`` (the radii and ``fit_inside``), ``raster`` (the drawn union and inks, from
+``stipple.io.raster``'s exact discs), ``inks`` (separations for multiplying inks), ``wrap`` (the periodic canvas),
+``checks`` (argument checks). The library uses numpy, scipy and Pillow only.
 """
 
 from .inks import INK_COLOURS, multiply_colour, multiply_separation
