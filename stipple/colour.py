@@ -156,6 +156,19 @@ def _with_mass(layers):
     return layers
 
 
+def check_layer_names(names, layers, separation, where="the image"):
+    """An error naming the layer ``names`` that are not inks of ``layers`` (``separate``'s of ``where`` into
+    ``separation``): saved layered points drawn or judged against the wrong image or palette."""
+    inks = [layer.name for layer in layers]
+    unknown = [name for name in dict.fromkeys(names) if name not in inks]
+    if unknown:
+        raise StippleError(
+            f"layers {', '.join(unknown)} are not inks of --palette {palette_label(separation)} for {where} (its "
+            f"inks there: {', '.join(inks)}): is it the colour image the points were made from, with their "
+            "palette and --black?"
+        )
+
+
 def palette_label(separation):
     """The separation as text: its name, or the pens' colours joined by commas (for checkpoints and notes)."""
     return separation if isinstance(separation, str) else ",".join(name for name, _ in separation)

@@ -75,29 +75,42 @@ def circle_table(path):
     return rows
 
 
-def test_render_of_a_colour_run_redraws_its_inks(tmp_path):
+@pytest.mark.parametrize(
+    "run_options, render_options",
+    [([], []), (["--palette", "cmy"], []), (["--black", "0.3"], ["--black", "0.3"])],
+    ids=["cmyk", "cmy-from-the-names", "black"],
+)
+def test_render_of_a_colour_run_redraws_its_inks(tmp_path, run_options, render_options):
     """A layered CSV's dots keep their inks: with --like the colour image, the same layers, colours and
     tone-true radii as the colour command's own SVG, and its PNG; without, each layer in its ink's colour (they
-    were drawn as one black layer)."""
+    were drawn as one black layer). Three colour inks are a cmy separation (they were taken for cmyk, whose gray
+    goes to a black ink they do not have: a far lighter picture), and --black is the run's."""
     pixels = np.zeros((12, 16, 3), dtype=np.uint8)
     pixels[:, :8], pixels[:, 8:] = (230, 40, 40), (40, 110, 110)
     image = tmp_path / "flag.png"
     Image.fromarray(pixels).save(image)
     own = [tmp_path / name for name in ("dots.csv", "dots.svg", "dots.png")]
-    arguments = ["colour", image, "-M", 300, "--iterations", 15, "-q", "--png-width", 160]
+    arguments = ["colour", image, "-M", 300, "--iterations", 15, "-q", "--png-width", 160, *run_options]
     assert run(arguments + [item for path in own for item in ("-o", path)]).exit_code == 0
     again = [tmp_path / name for name in ("again.svg", "again.png")]
-    result = run(["render", own[0], "--like", image, "--png-width", 160, "-o", again[0], "-o", again[1]])
+    result = run(
+        ["render", own[0], "--like", image, "--png-width", 160, "-o", again[0], "-o", again[1], *render_options]
+    )
     assert result.exit_code == 0, result.output
     first, second = circle_table(own[1]), circle_table(again[0])
     assert [row[:2] for row in first] == [row[:2] for row in second]
     np.testing.assert_allclose([row[2:] for row in first], [row[2:] for row in second], rtol=1e-3, atol=2e-4)
     difference = np.abs(np.asarray(Image.open(own[2]), float) - np.asarray(Image.open(again[1]), float))
     assert difference.mean() < 1.0
+    if run_options:
+        return
     plain = tmp_path / "plain.svg"
     assert run(["render", own[0], "-o", plain]).exit_code == 0
     fills = {label.split("-", 1)[1]: fill for label, fill, *_ in circle_table(plain)}
     assert fills == {"cyan": "#00ffff", "magenta": "#ff00ff", "yellow": "#ffff00", "black": "#000000"}
+    for options in (["--palette", "cmy"], ["--black", "0.5"]):
+        refused = run(["render", own[0], "-o", tmp_path / "x.svg", *options])
+        assert refused.exit_code == 1 and "give --like" in refused.output
 
 
 def test_render_warns_when_points_lie_outside_the_canvas_given(torus_csv, tmp_path):

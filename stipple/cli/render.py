@@ -44,9 +44,15 @@ from .supervise import guarded_files, plot_order, write_outputs
     help="Layered points (a CSV with a layer column, as stipple colour writes): the palette of --like's separation "
     "(default: the inks the layers are named by; pens named by colour in the order they appear).",
 )
+@click.option(
+    "--black",
+    type=click.FloatRange(0, 1),
+    default=None,
+    help="Layered points with --like: the run's --black (cmyk; default 1).",
+)
 @look_options
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
-def render(points_source, outputs, like, size, coords, projection, view, palette, **options):
+def render(points_source, outputs, like, size, coords, projection, view, palette, black, **options):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     import numpy as np
 
@@ -65,11 +71,11 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
         with guarded_files([("points", points_source), ("--like image", like)], outputs):
             domain, points, names = read_points(points_source, labels=True)
             if names is not None:
-                files = redraw(points, names, formats, like, size, palette, options)
+                files = redraw(points, names, formats, like, size, (palette, black), options)
                 write_outputs(outputs, files)
                 return
-            if palette is not None:
-                raise StippleError("--palette is for layered points (a CSV with a layer column)")
+            if palette is not None or black is not None:
+                raise StippleError("--palette and --black are for layered points (a CSV with a layer column)")
             if domain == "sphere":
                 check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
                 points = plot_order(points, points, options, "radians")
@@ -91,8 +97,9 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
         raise click.ClickException(str(error)) from None
 
 
-def redraw(pixels, names, formats, like, size, palette, options):
-    """The files of layered torus points (``stipple.pipelines.colour.redraw_layers``)."""
+def redraw(pixels, names, formats, like, size, separation, options):
+    """The files of layered torus points (``stipple.pipelines.colour.redraw_layers``); ``separation`` is
+    ``(--palette, --black)``, for the tone of ``like``'s inks."""
     from ..colour import parse_palette
     from ..io.images import load_colour
     from ..pipelines.colour import redraw_layers
@@ -102,13 +109,20 @@ def redraw(pixels, names, formats, like, size, palette, options):
         raise StippleError("--invert, --color and --background are for one-colour dots; inks print on white paper")
     if like is not None and size is not None:
         raise StippleError("give --like or --size, not both")
+    palette, black = separation
+    if like is None and (palette is not None or black is not None):
+        raise StippleError("--palette and --black separate --like's image: give --like, the colour image of the points")
     draw = render_settings(options)
     draw.pop("color")
     like = None if like is None else load_colour(like)
     # ``redraw_layers`` wraps the points onto the canvas: only ``torus_canvas``'s canvas is needed.
     shape = like.shape[:2] if like is not None else torus_canvas(pixels, None, size)[0]
     palette = None if palette is None else parse_palette(palette)
-    files = redraw_layers(pixels, names, formats, draw, like=like, shape=shape, palette=palette, order=options["order"])
+    black = 1.0 if black is None else black
+    order = options["order"]
+    files = redraw_layers(
+        pixels, names, formats, draw, like=like, shape=shape, palette=palette, black=black, order=order
+    )
     if like is not None or size is not None:
         warn_beyond(pixels, shape, options)
     return files

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from ..colour import parse_palette, separate
+from ..colour import check_layer_names, parse_palette, separate
 from ..errors import StippleError
 from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
 from ..io.sources import read_source
@@ -93,14 +93,9 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     if input_source is None:
         raise StippleError("missing INPUT: the colour image the layered points were made from")
     rgb = load_colour(input_source)
-    layers = separate(rgb, parse_palette(options["palette"]), options["black"])
-    unknown = sorted(set(names.tolist()) - {layer.name for layer in layers})
-    if unknown:
-        inks = ", ".join(layer.name for layer in layers)
-        raise StippleError(
-            f"layers {', '.join(unknown)} are not inks of --palette {options['palette']} for {input_source} (its "
-            f"inks there: {inks}): is it the colour image the points were made from, with their palette?"
-        )
+    separation = parse_palette(options["palette"])
+    layers = separate(rgb, separation, options["black"])
+    check_layer_names(names.tolist(), layers, separation, input_source)
     rows, columns = rgb.shape[:2]
     unit = np.mod(pixels / np.array([columns, rows]), 1.0)
     union = sum(layer.density for layer in layers)

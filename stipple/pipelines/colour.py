@@ -5,8 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import INK_COLOURS, colour_problem, palette_label, print_target, separate
-from ..errors import StippleError
+from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_canvas, default_png_width
@@ -120,14 +119,9 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
     if like is not None:
         rgb = like if isinstance(like, np.ndarray) else load_colour(like)
         shape = rgb.shape[:2]
-        layers = {layer.name: layer for layer in separate(rgb, palette, black)}
-        unknown = [name for name in inks if name not in layers]
-        if unknown:
-            raise StippleError(
-                f"layers {', '.join(unknown)} are not inks of --palette {palette_label(palette)} for the image (its "
-                f"inks there: {', '.join(layers)}): is it the colour image the points were made from, with their "
-                "palette?"
-            )
+        separated = separate(rgb, palette, black)
+        check_layer_names(inks, separated, palette)
+        layers = {layer.name: layer for layer in separated}
         tone = tone_settings([layers[name] for name in inks], rgb, palette)
     if ".png" in formats:
         check_png_canvas(shape[::-1], draw["png_width"] or default_png_width(len(pixels)), layers=INK_PICTURE_LAYERS)
@@ -140,10 +134,13 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
 
 
 def layer_palette(names):
-    """The palette that layer ``names`` come from: "gray" for black alone, "cmyk" for inks of it, else pens named
-    by their colours in the order given."""
+    """The palette that layer ``names`` come from: "gray" for black alone, "cmy" for the colour inks without black
+    (a cmyk separation with no black ink gives the same three), "cmyk" for inks of it, else pens named by their
+    colours in the order given."""
     if set(names) == {"black"}:
         return "gray"
+    if set(names) <= set(INK_COLOURS) - {"black"}:
+        return "cmy"
     if set(names) <= set(INK_COLOURS):
         return "cmyk"
     return [(name, ink_colour(name)) for name in names]
