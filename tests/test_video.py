@@ -353,6 +353,29 @@ def test_colour_video_command_writes_each_dots_ink_and_refuses_gray_options(tmp_
     assert refused.exit_code != 0 and "--levels" in refused.output and not (tmp_path / "e.csv").exists()
 
 
+def test_a_gray_palette_video_prints_each_frames_luminance(tmp_path):
+    """As ``stipple colour --palette gray``: one black ink's tone is the frame's luminance, not the mean of its
+    channels (a saturated blue, luminance 0.21, was drawn 0.34 in every frame)."""
+    pixels = np.zeros((16, 24, 3), dtype=np.uint8)
+    pixels[:, :12], pixels[:, 12:] = (20, 40, 200), (230, 210, 20)  # luminance 0.21 and 0.76
+    source = tmp_path / "in"
+    source.mkdir()
+    for k in range(2):
+        Image.fromarray(pixels).save(source / f"{k}.png")
+    (tmp_path / "f").mkdir()
+    result = video(source, "-M", 1200, "--palette", "gray", "--iterations", 30, "-o", tmp_path / "f/%d.png")
+    assert result.exit_code == 0, result.output
+    luminance = pixels[0] / 255 @ [0.299, 0.587, 0.114]
+    for k in range(2):
+        drawn = (
+            np.asarray(Image.open(tmp_path / f"f/{k}.png").convert("RGB"), dtype=float) / 255 @ [0.299, 0.587, 0.114]
+        )
+        columns = drawn.shape[1]
+        for part, wanted in ((slice(3, 9), luminance[0]), (slice(15, 21), luminance[-1])):
+            half = drawn[:, part.start * columns // 24 : part.stop * columns // 24]
+            assert abs(half.mean() - wanted) < 0.03, (k, half.mean(), wanted)
+
+
 def test_levels_stretch_every_frame_alike(tmp_path):
     from stipple.io.images import load_density
     from stipple.io.video import open_frames

@@ -73,6 +73,7 @@ def video(ctx, source, **options):
     images, with the same dots in every frame: -o out.mp4, -o dots.csv (frame,x,y; row i of every frame is dot
     i), -o 'frames/%04d.png' (one PNG or SVG per frame). With --palette, one layer of dots per ink, each dot
     keeping its ink (CSV frame,x,y,layer)."""
+    from ..colour import parse_palette
     from ..io.png import check_png_outputs
     from ..io.video import VideoOutputs, check_frames_spare_inputs, frame_path, open_frames, plan_outputs
     from ..pipelines.outputs import torus_files
@@ -102,7 +103,7 @@ def video(ctx, source, **options):
                 return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
 
             if options["palette"] is not None:
-                draw = colour_drawing(frames.shape, settings)
+                draw = colour_drawing(frames.shape, settings, parse_palette(options["palette"]))
             with VideoOutputs(plan, frames.shape, draw, fps, layered=options["palette"] is not None) as outputs:
                 result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
                 if result.frames:
@@ -112,19 +113,17 @@ def video(ctx, source, **options):
     finish(result, stopped_by, options, started)
 
 
-def colour_drawing(shape, settings):
-    """``draw(points, frame, fmt)`` of a colour video's frame: its inks' layers, as ``stipple colour`` draws them."""
-    import numpy as np
-
+def colour_drawing(shape, settings, separation):
+    """``draw(points, frame, fmt)`` of a colour video's frame: its inks' layers, as ``stipple colour`` draws them
+    (``separation``: the parsed ``--palette``)."""
+    from ..pipelines.colour import tone_settings
     from ..pipelines.outputs import layered_files
 
     settings = {key: value for key, value in settings.items() if key != "color"}
 
     def draw(points, frame, fmt):
         placed = [(name, colour, points[part]) for name, colour, part in frame.inks]
-        coverages = [np.clip(density, 0.0, 1.0) for density in frame.density]
-        ink = float(frame.density.sum(axis=0).mean())
-        tone = {"ink": ink, "coverages": coverages, "target": frame.picture}
+        tone = tone_settings(list(frame.density), frame.picture, separation)
         return layered_files(placed, shape, [fmt], settings, **tone)[fmt]
 
     return draw

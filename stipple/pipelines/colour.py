@@ -48,19 +48,20 @@ def ink_layers(layers, problem, result):
     placed = [
         (layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, problem.slices, strict=True)
     ]
-    return placed, union_ink(layers)
+    return placed, union_ink([layer.density for layer in layers])
 
 
-def union_ink(layers):
-    """The mean density of all the inks together: the ink that all the dots lay down."""
-    return sum(layer.density for layer in layers).mean()
+def union_ink(densities):
+    """The mean density of all the inks' ``densities`` together: the ink that all the dots lay down."""
+    return float(sum(densities).mean())
 
 
-def tone_settings(layers, rgb, separation):
-    """The tone style's keywords of ``layered_files`` for the inks ``layers`` (in the drawing's layer order) of
-    ``rgb`` separated by ``separation``: each ink's coverage, the colour they print and their mean ink."""
-    coverages = [np.clip(layer.density, 0.0, 1.0) for layer in layers]
-    return {"coverages": coverages, "target": print_target(rgb, separation), "ink": union_ink(layers)}
+def tone_settings(densities, rgb, separation):
+    """The tone style's keywords of ``layered_files`` for the inks' ``densities`` (in the drawing's layer order) of
+    ``rgb`` separated by ``separation`` (``stipple colour``, its redraw and a colour video's frames): each ink's
+    coverage, the colour they print and their mean ink."""
+    coverages = [np.clip(density, 0.0, 1.0) for density in densities]
+    return {"coverages": coverages, "target": print_target(rgb, separation), "ink": union_ink(densities)}
 
 
 def stipple_colour(image, formats, recipe, *, session=None, announce=None):
@@ -87,7 +88,7 @@ def stipple_colour(image, formats, recipe, *, session=None, announce=None):
     shape, travel = rgb.shape[:2], []
     if recipe.order:
         placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
-    tone = tone_settings(layers, rgb, settings["separation"])
+    tone = tone_settings([layer.density for layer in layers], rgb, settings["separation"])
     files = layered_files(placed, shape, formats, recipe.draw, **tone)
     return ImageOutputs(files, result, travel)
 
@@ -122,7 +123,7 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
         separated = separate(rgb, palette, black)
         check_layer_names(inks, separated, palette)
         layers = {layer.name: layer for layer in separated}
-        tone = tone_settings([layers[name] for name in inks], rgb, palette)
+        tone = tone_settings([layers[name].density for name in inks], rgb, palette)
     if ".png" in formats:
         check_png_canvas(shape[::-1], draw["png_width"] or default_png_width(len(pixels)), layers=INK_PICTURE_LAYERS)
     rows, columns = shape
