@@ -86,7 +86,12 @@ def test_auto_on_the_command_line(tmp_path):
 
 @pytest.mark.parametrize(
     "style, noted",
-    [(["--dot-style", "filled"], True), (["--style", "plotter"], True), ([], False)],
+    [
+        (["--dot-style", "filled"], True),
+        (["--style", "plotter"], True),
+        ([], False),
+        (["--style", "plotter", "--dot-radius", "3mm"], False),  # a fixed radius: dots may touch and overlap
+    ],
 )
 def test_a_given_count_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp_path, style, noted):
     """-M auto says that tones darker than the no-touch packing's come out lighter; a given -M did not (a dark

@@ -137,6 +137,17 @@ def test_render_refuses_a_video_csv_of_several_frames_and_draws_one_frame(tmp_pa
     kept = tmp_path / "frame3.csv"
     assert run(["render", kept, "-o", tmp_path / "y.csv"]).exit_code == 0
     assert (tmp_path / "y.csv").read_text().count("\n") == 3 and shlex.split(advice)[0] == "awk"
+    # The advice works for a name with a space (quoted) and for standard input (piped again).
+    spaced = tmp_path / "my video.csv"
+    spaced.write_text(frames.read_text().replace("\n3,", "\n1234567,").replace("\n4,", "\n1234568,"))
+    result = run(["render", spaced, "-o", tmp_path / "x.svg"])
+    assert "(1234567 to 1234568)" in result.output
+    subprocess.run(result.output.split("e.g. ", 1)[1].strip(), shell=True, check=True, cwd=tmp_path)
+    assert (tmp_path / "frame1234567.csv").read_text().count("\n") == 3
+    result = run(["render", "-", "-o", tmp_path / "x.svg"], input=frames.read_text())
+    advice = result.output.split("e.g. ", 1)[1].strip()
+    subprocess.run(advice, shell=True, check=True, cwd=tmp_path, input=frames.read_text(), text=True)
+    assert (tmp_path / "frame3.csv").read_text() == "frame,x,y\n3,1.5,2.5\n3,4.0,5.0\n"
 
 
 def test_render_rejects_unknown_csv(tmp_path):

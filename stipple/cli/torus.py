@@ -118,7 +118,8 @@ def pen_reach_hint(weights, options):
     from ..render.pen_count import PEN_STYLES, reachable_tone
 
     pen = options["dot_style"] in PEN_STYLES
-    if options["n_points"] == "auto" or not (pen or options["style"] == "plotter"):
+    fixed = options.get("dot_radius") is not None  # every dot that radius, touching or not
+    if options["n_points"] == "auto" or fixed or not (pen or options["style"] == "plotter"):
         return
     import numpy as np
 

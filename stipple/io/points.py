@@ -2,6 +2,7 @@
 value checked (``read_table``; ``stipple.pipelines.inputs`` makes them torus or sphere points)."""
 
 import io
+import shlex
 import sys
 
 import numpy as np
@@ -11,6 +12,8 @@ from .sources import read_source
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
+# How messages name standard input.
+STDIN_NAME = "<stdin>"
 
 
 def csv_bytes(columns, names, number_format=".6f"):
@@ -70,7 +73,7 @@ def read_table(source, max_rows, labels=False):
     each ``x,y`` row's layer (a ``layer`` or ``color`` column, as ``stipple colour`` writes), or None:
     ``(kind, points, names)``.
     """
-    name = "<stdin>" if source == "-" else source
+    name = STDIN_NAME if source == "-" else source
     data = read_source(sys.stdin.buffer if source == "-" else source)
     first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
     columns = {column.strip().lower() for column in first_line.split(",")}
@@ -115,10 +118,12 @@ def one_frame(frames, name):
     together are no one picture's. One frame's rows are read as they are."""
     numbers = np.unique(frames)
     if len(numbers) > 1:
-        first = f"{numbers[0]:g}"
+        first, last = (f"{number:.15g}" for number in (numbers[0], numbers[-1]))
+        # The command reads the same file, or the same standard input when piped again.
+        source = "" if name == STDIN_NAME else " " + shlex.quote(str(name))
         raise StippleError(
-            f"{name}: a video's dots of {len(numbers)} frames ({first} to {numbers[-1]:g}); keep one frame's rows, "
-            f"e.g. awk -F, 'NR == 1 || $1 == {first}' {name} > frame{first}.csv"
+            f"{name}: a video's dots of {len(numbers)} frames ({first} to {last}); keep one frame's rows, "
+            f"e.g. awk -F, 'NR == 1 || $1 == {first}'{source} > frame{first}.csv"
         )
 
 
