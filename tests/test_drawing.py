@@ -21,9 +21,11 @@ def run(args):
     return result
 
 
-def circles(path):
-    """``(x, y, r)`` rows of the SVG's circles."""
-    found = re.findall(r'<circle cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"', Path(path).read_text())
+def circles(path, copies=False):
+    """``(x, y, r)`` rows of the SVG's circles: the dots', with ``copies`` their copies across a wrapping page's
+    edges too."""
+    end = "" if copies else "/>"
+    found = re.findall(r'<circle cx="([-0-9.]+)" cy="([-0-9.]+)" r="([-0-9.]+)"' + end, Path(path).read_text())
     return np.array(found, dtype=float)
 
 
@@ -57,9 +59,8 @@ def test_a_dot_across_the_edge_from_a_black_bar_is_drawn_in_the_bar_in_both_styl
     for style in ("plotter", "tone"):
         svg = tmp_path / f"{style}.svg"
         run(["render", tmp_path / "dots.csv", "--like", tmp_path / "bar.png", "--style", style, "-o", svg])
-        table = circles(svg)
-        assert len(table) == len(bar) + 1
-        assert not np.any(table[:, 0] > 30), style  # nothing on the white half
+        assert len(circles(svg)) == len(bar) + 1
+        assert not np.any(circles(svg, copies=True)[:, 0] > 30), style  # nothing on the white half
 
 
 def test_uniform_sphere_is_not_a_black_disc(tmp_path):

@@ -63,6 +63,12 @@ def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=No
     return "\n".join(parts).encode()
 
 
+def _circles(centres, radii, attributes=""):
+    return [
+        f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{r:.4f}"{attributes}/>' for (x, y), r in zip(centres, radii, strict=True)
+    ]
+
+
 def _background(background, size):
     """A filled rectangle under the drawing (as a list of one line), or none on white paper."""
     if tuple(background) == WHITE:
@@ -84,10 +90,10 @@ def _svg_layer(index, dots, pen_width, blend="over"):
         body = [f'<path d="{path_data(path)}"/>' for path in dots.paths]
     elif dots.squash is None:
         head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
-        body = [
-            f'<circle cx="{x:.4f}" cy="{y:.4f}" r="{r:.4f}"/>'
-            for (x, y), r in zip(dots.centres, dots.radii, strict=True)
-        ]
+        body = _circles(dots.centres, dots.radii)
+        if dots.copies is not None:
+            # A wrapping page's discs across its edges, as the PNG draws them (marked: they are not dots of their own).
+            body += _circles(*dots.copies, ' class="copy"')
     else:
         head = f'<g {label} fill="{colour}" stroke="{colour}" stroke-width="0">'
         body = [

@@ -30,7 +30,7 @@ class Dots:
     ``radii`` are per dot; a foreshortened dot is an ellipse whose axis along ``angle`` (radians, canvas
     coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.render.pen``), if any.
     ``copies``, ``(centres, radii)``: on a page that wraps around (a torus's tone picture), the discs' copies
-    across its edges, which a PNG draws too; an SVG has one circle per dot, cut by its page.
+    across its edges, drawn by the PNG and the SVG (circles of class "copy") too, cut by the page.
     """
 
     name: str
