@@ -20,7 +20,7 @@ from itertools import combinations
 import numpy as np
 
 from .errors import StippleError
-from .io.images import load_colour
+from .io.images import LUMA, load_colour
 from .multiclass import multiclass_problem, run
 
 SEPARATIONS = ("cmyk", "cmy", "gray")
@@ -30,7 +30,6 @@ INK_COLOURS = {
     "yellow": (1.0, 1.0, 0.0),
     "black": (0.0, 0.0, 0.0),
 }
-_LUMA = np.array([0.299, 0.587, 0.114])
 TIE_BREAK = 1e-3
 MAX_PENS = 8
 MIN_ABSORPTANCE = 0.05
@@ -129,7 +128,7 @@ def separate(rgb, separation="cmyk", black=1.0):
     if not 0 <= black <= 1:
         raise StippleError(f"black must be in [0, 1], not {black!r}")
     if separation == "gray":
-        densities = {"black": 1.0 - rgb @ _LUMA}
+        densities = {"black": 1.0 - rgb @ LUMA}
     else:
         inks = 1.0 - rgb
         grey = black * inks.min(axis=2) if separation == "cmyk" else np.zeros(rgb.shape[:2])
@@ -144,7 +143,7 @@ def print_target(rgb, separation):
     colour channels equally would be ``1 - mean(R, G, B)``, a saturated blue drawn 0.34 for luminance 0.20)."""
     rgb = np.asarray(rgb, dtype=np.float64)
     if isinstance(separation, str) and separation == "gray":
-        return np.repeat((rgb @ _LUMA)[..., None], 3, axis=2)
+        return np.repeat((rgb @ LUMA)[..., None], 3, axis=2)
     return rgb
 
 

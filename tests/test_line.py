@@ -11,11 +11,12 @@ from scipy.ndimage import distance_transform_edt
 from stipple.errors import StippleError
 from stipple.line import draw_line
 from stipple.line.problem import darkest_tone, default_length, default_line_bandwidth, length_factor, line_problem
-from stipple.line.start import closed_length, initial_loop, outline_walk, resample_closed, spanning_tree, tree_tour
+from stipple.line.start import initial_loop, outline_walk, resample_closed, spanning_tree, tree_tour
 from stipple.line.terms import SpeedConstraint
 from stipple.manifolds import Rectangle
 from stipple.measures.evaluate import fitted_similarity, line_ink
 from stipple.objective import SumObjective
+from stipple.render.pen import closed_length
 from stipple.sampling import hilbert_index
 
 STEPS = np.logspace(-2.5, -4, 6)

@@ -14,7 +14,9 @@ from .sources import read_source
 NPY_MAGIC = b"\x93NUMPY"
 MAX_NPY_HEADER = 10_000
 # Rec. 601 luma in thousandths: integer sums keep white exactly white (0.299 + 0.587 + 0.114 != 1 in floats).
-_LUMA = np.array([299, 587, 114])
+LUMA_PER_MILLE = np.array([299, 587, 114])
+# The same weights for colours in [0, 1]: the luminance of Rec. 601 everywhere (separation, tone, measures).
+LUMA = LUMA_PER_MILLE / 1000
 _FLOAT_SCALES = (1.0, 255.0, 65535.0)
 
 
@@ -62,7 +64,7 @@ def _gray_values(image, name):
         return np.asarray(image.convert("L"), dtype=np.float64) / 255.0
     rgba = np.asarray(image.convert("RGBA"), dtype=np.int64)
     alpha = rgba[..., 3]
-    luma = rgba[..., :3] @ _LUMA  # 0 .. 255000, exact
+    luma = rgba[..., :3] @ LUMA_PER_MILLE  # 0 .. 255000, exact
     # (luma * alpha + 255000 * (255 - alpha)) / (255000 * 255) in exact integers: white stays 1.0.
     return (luma * alpha + 255000 * (255 - alpha)) / (255000.0 * 255.0)
 

@@ -66,11 +66,6 @@ def tree_tour(points):
     return visits[np.sort(first)]
 
 
-def closed_length(points):
-    """Length of the closed polygon through ``points``."""
-    return float(np.sum(np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)))
-
-
 def resample_closed(points, count):
     """``count`` points equally spaced by arclength along the closed polygon through ``points``."""
     closed = np.vstack([points, points[:1]])

@@ -15,10 +15,10 @@ import numpy as np
 from PIL import Image
 from scipy.ndimage import gaussian_filter
 
+from ..io.images import LUMA
+
 SIGMAS = (2.0, 4.0)
 TENTHS = 10
-# Rec. 601 luma, as stipple reads a colour image's gray values.
-LUMA = np.array([0.299, 0.587, 0.114])
 # The eight corners of the RGB cube: the inks (and white paper) of the colour Floyd-Steinberg baseline.
 CUBE = [(r, g, b) for r in (0, 255) for g in (0, 255) for b in (0, 255)]
 FS_UPSCALE = 4

@@ -12,8 +12,8 @@ from ..errors import StippleError
 from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
 from ..io.sources import read_source
 from ..line.problem import line_problem
-from ..line.start import closed_length
 from ..multiclass import class_bandwidth
+from ..render.pen import closed_length
 from ..sphere import sphere_density, sphere_problem
 from ..torus import torus_problem
 from .evaluate import evaluate_line, evaluate_sphere, evaluate_torus

@@ -7,7 +7,7 @@ from ..io.png import default_png_width
 from ..io.units import BLACK, WHITE, to_user_units
 from .dots import flat_dots, home_positions, ink_radius, squash_paths, tone_dots
 from .drawing import Drawing
-from .pen import dot_paths
+from .pen import closed_length, dot_paths
 
 
 def torus_drawing(points, shape, *, darkness=None, color=BLACK, **options):
@@ -115,7 +115,7 @@ def tone_stroke(pixels, shape, ink):
     where strokes touch (at density 1). A 1-pixel stroke drew the 3:1 panorama of the held-out sweep at mean
     0.29 too light (darkest tenth 0.51 for 0.06)."""
     rows, columns = shape
-    length = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1).sum()
+    length = closed_length(pixels)
     return float(ink) * rows * columns / length if length > 0 else 1.0
 
 

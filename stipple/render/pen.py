@@ -15,6 +15,11 @@ def path_length(centres):
     return float(np.sum(np.linalg.norm(np.diff(centres, axis=0), axis=1)))
 
 
+def closed_length(points):
+    """Length of the closed polygon through ``points`` (a one-line drawing's path)."""
+    return float(np.sum(np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)))
+
+
 def greedy_order(centres):
     """Visit order starting at the dot nearest the origin, always moving to the nearest unvisited dot."""
     count = len(centres)

@@ -3,6 +3,7 @@
 import numpy as np
 
 from ..errors import StippleError
+from ..io.images import LUMA
 
 MULTIPLY_SEPARATIONS = ("cmyk", "cmy", "gray")
 INK_COLOURS = {
@@ -11,7 +12,6 @@ INK_COLOURS = {
     "yellow": (1.0, 1.0, 0.0),
     "black": (0.0, 0.0, 0.0),
 }
-_LUMA = np.array([0.299, 0.587, 0.114])
 
 
 def multiply_separation(rgb, separation="cmyk"):
@@ -49,7 +49,7 @@ def multiply_separation(rgb, separation="cmyk"):
     if separation not in MULTIPLY_SEPARATIONS:
         raise StippleError(f"separation must be one of {', '.join(MULTIPLY_SEPARATIONS)}, not {separation!r}")
     if separation == "gray":
-        return [("black", INK_COLOURS["black"], np.clip(1.0 - rgb @ _LUMA, 0.0, 1.0))]
+        return [("black", INK_COLOURS["black"], np.clip(1.0 - rgb @ LUMA, 0.0, 1.0))]
     names = ("cyan", "magenta", "yellow")
     if separation == "cmy":
         return [(name, INK_COLOURS[name], 1.0 - rgb[..., i]) for i, name in enumerate(names)]
