@@ -137,3 +137,10 @@ def test_verbose_names_the_threads_asked_for_and_the_transforms_share(image_path
     args = ["torus", image_path, "-M", 150, "--iterations", 2, "--threads", threads, "-v", "-o", tmp_path / "d.csv"]
     result = run(args)
     assert result.exit_code == 0 and shown in result.output, result.output
+
+
+def test_verbose_on_the_sphere_names_the_adjoints_one_thread(tmp_path):
+    """The sphere's adjoint SHTs run on one thread (bit-reproducible sums): -v says so beside the syntheses'."""
+    args = ["sphere", "builtin:gaussians", "-M", 200, "--iterations", 2, "--threads", 2, "-v", "-o", tmp_path / "d.csv"]
+    result = run(args)
+    assert result.exit_code == 0 and "threads=2 (transforms 2, adjoints 1)" in result.output, result.output

@@ -182,8 +182,12 @@ def announcer(options):
         fourier = problem.discrepancy.fourier
         details = ", ".join(f"{key}={value}" for key, value in problem.settings.items())
         threads = options.get("threads") or default_threads()
+        share = f"transforms {fourier.threads}"
+        adjoints = getattr(fourier, "adjoint_threads", fourier.threads)
+        if adjoints != fourier.threads:
+            share += f", adjoints {adjoints}"
         click.echo(
-            f"stipple: {details}, threads={threads} (transforms {fourier.threads}), epsilon={fourier.epsilon:g}, "
+            f"stipple: {details}, threads={threads} ({share}), epsilon={fourier.epsilon:g}, "
             f"tol={options['tol']:g}, iterations<={options['iterations']}",
             err=True,
         )
