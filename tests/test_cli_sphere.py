@@ -140,3 +140,25 @@ def test_a_map_that_is_not_two_to_one_gets_a_note(tmp_path, shape, noted):
     result = run(["sphere", str(path), "-M", "100", "--iterations", "2", "-o", str(tmp_path / "x.csv")])
     assert result.exit_code == 0, result.output
     assert ("not 2:1" in result.output) == noted, result.output
+
+
+def test_the_equirect_picture_lies_over_its_map_and_follows_view(tmp_path):
+    """The 2:1 map is drawn in the input's own layout (its first column at the left; it was drawn from lon -180,
+    shifted half a turn against a map that starts at lon 0), and --view moves its centre (it was ignored)."""
+    rows = 40
+    darkness = np.full((rows, 2 * rows), 0.05)
+    darkness[5:35, : rows // 2] = 0.9  # a dark block over lon 0..90 E (the map's first quarter)
+    path = tmp_path / "block.npy"
+    np.save(path, darkness)
+
+    def quarters(*view):
+        png = tmp_path / f"map{len(view)}.png"
+        arguments = ["sphere", path, "-M", 1500, "--iterations", 20, "--projection", "equirect", "-q", "-o", png]
+        assert run([*arguments, *view]).exit_code == 0
+        gray = np.asarray(Image.open(png).convert("L"), dtype=float)
+        return [1 - part.mean() / 255 for part in np.array_split(gray, 4, axis=1)]
+
+    own = quarters()
+    assert own[0] > 2 * max(own[1:]), own
+    centred = quarters("--view", "0,0")  # lon 0 in the middle: the block in the third quarter
+    assert centred[2] > 2 * max(centred[0], centred[1], centred[3]), centred

@@ -51,7 +51,12 @@ def design_options(function):
             "--coords", type=click.Choice(["lonlat", "xyz"]), default="xyz", show_default=True, help="CSV columns."
         ),
         click.option("--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True),
-        click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees)."),
+        click.option(
+            "--view",
+            default="0,0",
+            show_default=True,
+            help="Centre LON,LAT of the globe view in degrees (equirect: the map's centre longitude).",
+        ),
     ]
     return apply_options(function, own + run_options(iterations=20000) + output_options() + session_options())
 

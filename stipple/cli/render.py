@@ -36,7 +36,12 @@ from .supervise import guarded_files, plot_order, write_outputs
 @click.option(
     "--projection", type=click.Choice(PROJECTIONS), default="ortho", show_default=True, help="Sphere PNG view."
 )
-@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view.")
+@click.option(
+    "--view",
+    default="0,0",
+    show_default=True,
+    help="Centre LON,LAT of the globe view (equirect: the map's centre longitude).",
+)
 @click.option("--invert", is_flag=True, help="Draw white dots on black.")
 @click.option(
     "--palette",

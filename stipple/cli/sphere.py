@@ -45,7 +45,12 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
     show_default=True,
     help="PNG view: orthographic globe or equirectangular map.",
 )
-@click.option("--view", default="0,0", show_default=True, help="Centre LON,LAT of the globe view (degrees).")
+@click.option(
+    "--view",
+    default=None,
+    help="Centre LON,LAT of the globe view in degrees (default 0,0); with --projection equirect the map's centre "
+    "longitude (default: the input map's own layout, its first column at the left edge).",
+)
 @click.pass_context
 def sphere(ctx, map_source, **options):
     """Stipple MAP on the sphere: an equirectangular .npy map (rescaled to [0, 1]), an image (w = 1 - u),
@@ -60,8 +65,8 @@ def sphere(ctx, map_source, **options):
     map_source = resolve_input(ctx, map_source)
     try:
         settings = render_settings(options)
-        view = parse_view(options["view"])
         lon0 = check_longitude("lon0", options["lon0"])
+        view = parse_view(options["view"] or default_view(options["projection"], lon0))
         formats = [output_format(path) for path in options["outputs"]]
         check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
         inputs = [("map", map_source), init_input(options["init"])]
@@ -123,3 +128,9 @@ def warn_aspect(density, source, options):
             "180°, so its features are stretched on the globe",
             err=True,
         )
+
+
+def default_view(projection, lon0):
+    """The view without ``--view``: the globe faces 0,0; the equirectangular map has the input map's layout (its
+    first column, at longitude ``lon0``, at the left edge), so that the picture lies over the map."""
+    return f"{lon0 + 180:g},0" if projection == "equirect" else "0,0"

@@ -235,9 +235,11 @@ def orthographic(points, view):
     return xy, points @ centre
 
 
-def equirectangular(longitude, latitude, width):
-    """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, lon -180 at the left."""
-    return np.stack([(longitude + 180) / 360 * width, (90 - latitude) / 180 * width / 2], axis=1)
+def equirectangular(longitude, latitude, width, centre=0.0):
+    """Canvas positions of (lon, lat) degrees on a ``width × width/2`` canvas, longitude ``centre`` in the middle
+    (0: lon -180 at the left)."""
+    x = np.mod(np.asarray(longitude) - centre + 180, 360) / 360 * width
+    return np.stack([x, (90 - latitude) / 180 * width / 2], axis=1)
 
 
 # The darkness image that globe and map drawings are made tone-true against: pixels along the canvas's width.
@@ -248,15 +250,15 @@ def projected_darkness(darkness_at, projection, view):
     """The darkness of a sphere picture's canvas (``sphere_canvas``), ``(H, W)`` in [0, 1], white off the globe.
 
     ``darkness_at(longitude, latitude)`` (degrees, arrays) gives the sphere's darkness; each canvas pixel takes
-    it at the point of the sphere that the projection draws there ("equirect": the 2:1 map, lon -180 on the
-    left; "ortho": the visible side around ``view``).
+    it at the point of the sphere that the projection draws there ("equirect": the 2:1 map centred on ``view``'s
+    longitude; "ortho": the visible side around ``view``).
     """
     width, height = sphere_canvas(projection)
     columns = DARKNESS_PIXELS
     rows = int(round(columns * height / width))
     x, y = np.meshgrid((np.arange(columns) + 0.5) / columns, (np.arange(rows) + 0.5) / rows)
     if projection == "equirect":
-        return np.clip(darkness_at(360.0 * x - 180.0, 90.0 - 180.0 * y), 0.0, 1.0)
+        return np.clip(darkness_at(360.0 * x - 180.0 + view[0], 90.0 - 180.0 * y), 0.0, 1.0)
     u, v = (2 * x - 1) / GLOBE, (1 - 2 * y) / GLOBE
     inside = u * u + v * v < 1
     lon, lat = np.radians(view)

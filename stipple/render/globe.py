@@ -41,7 +41,8 @@ def sphere_drawing(
 ):
     """The ``Drawing`` of sphere ``points`` (unit vectors; ``lon_lat`` their degrees).
 
-    ``projection`` "equirect" draws every dot on the 2:1 map (inset from the edges like torus dots), "ortho" the
+    ``projection`` "equirect" draws every dot on the 2:1 map centred on ``view``'s longitude (inset from the edges
+    like torus dots), "ortho" the
     visible side of the globe around ``view = (lon, lat)``, each dot foreshortened towards the limb (an
     ellipse), so the limb keeps its tone; the notes say how many dots are on the visible side. ``style``
     "plotter" (or "tone" without ``darkness_at``, e.g. a uniform sphere): the angular radius that keeps the mean
@@ -63,7 +64,7 @@ def sphere_drawing(
     )
     if projection == "equirect":
         centres, margin = inset(
-            equirectangular(longitude, latitude, canvas[0]), canvas, per_radian * angles.max(initial=0)
+            equirectangular(longitude, latitude, canvas[0], view[0]), canvas, per_radian * angles.max(initial=0)
         )
         drawn = Dots("dots", color, centres, np.minimum(angles * per_radian, margin))
         notes = [f"{len(points)} dots, equirectangular (all of them)"]
@@ -84,7 +85,7 @@ def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
     """One layer of tone-true round dots on the sphere picture's canvas, and the notes."""
     canvas = sphere_canvas(projection)
     if projection == "equirect":
-        centres = equirectangular(*lon_lat, canvas[0])
+        centres = equirectangular(*lon_lat, canvas[0], view[0])
         note = f"{len(points)} dots, equirectangular (all of them), tone-true radii"
     else:
         centres, depth = orthographic(points, view)
