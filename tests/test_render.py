@@ -61,6 +61,11 @@ def test_render_sphere_points(tmp_path):
     xyz = np.loadtxt(result.stdout.splitlines()[1:], delimiter=",")
     np.testing.assert_allclose(np.linalg.norm(xyz, axis=1), 1, atol=1e-6)
     assert '"MultiPoint"' in (tmp_path / "g.geojson").read_text()
+    # A map's tone is not drawn again: --like was taken and ignored.
+    np.save(tmp_path / "map.npy", np.ones((8, 16)))
+    for option in (["--like", tmp_path / "map.npy"], ["--size", "16,8"]):
+        refused = run(["render", points, "-o", tmp_path / "x.png", *option])
+        assert refused.exit_code == 1 and "for torus points" in refused.output and not (tmp_path / "x.png").exists()
 
 
 def circle_table(path):

@@ -82,6 +82,11 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
             if palette is not None or black is not None:
                 raise StippleError("--palette and --black are for layered points (a CSV with a layer column)")
             if domain == "sphere":
+                if like is not None or size is not None:
+                    raise StippleError(
+                        "--like and --size are for torus points (an image's x,y); sphere points are drawn with "
+                        "even dots: for a map's tone, give stipple sphere the outputs"
+                    )
                 check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
                 points = plot_order(points, points, options, "radians")
                 degrees = lon_lat(points)
