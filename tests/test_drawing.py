@@ -136,3 +136,25 @@ def test_capped_radii_and_inset_rules():
     moved, margin = inset(np.array([[0.0, 0.0], [10.0, 5.0]]), (10.0, 5.0), 1.0)
     np.testing.assert_allclose(moved, [[1.0, 1.0], [9.0, 4.0]])
     assert margin == 1.0
+
+
+@pytest.mark.parametrize(
+    "style, area",
+    [
+        (["--dot-style", "point"], np.pi / 4 + 0.1),  # a stroke a tenth of the pen long, round caps
+        (["--dot-style", "circle", "--dot-radius", "2mm"], np.pi * (2**2 - 1**2)),  # a ring one pen wide
+    ],
+)
+def test_a_pen_preview_inks_the_area_its_svg_strokes(tmp_path, style, area):
+    """The PNG preview of pen paths inks what the SVG's strokes ink (round caps included): a 1 mm pen on a page of
+    1 mm user units, 25 dots far apart. Pillow's lines (width rounded to whole pixels, caps a pixel short) drew
+    a point pen 3 % lighter than its SVG."""
+    lattice = (np.arange(5) + 0.5) * 10
+    dots = tmp_path / "dots.csv"
+    dots.write_text("x,y\n" + "".join(f"{x},{y}\n" for x in lattice for y in lattice))
+    png = tmp_path / "pen.png"
+    arguments = ["render", dots, "--size", "50,50", "--width", "50mm", "--pen-width", "1mm", "--png-width", 500]
+    result = run([*arguments, *style, "-o", png])
+    assert result.exit_code == 0, result.output
+    ink = 1 - np.asarray(Image.open(png).convert("L"), dtype=float) / 255
+    assert ink.sum() / 100 == pytest.approx(25 * area, rel=0.01)  # 10 × 10 pixels a mm²

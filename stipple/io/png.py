@@ -14,6 +14,7 @@ SUPERSAMPLE = 4
 MAX_CANVAS_SIDE = 1 << 20
 # Discs are rasterised in bands of about this many fine pixels.
 MASK_BAND_PIXELS = 1 << 22
+PATHS_PER_GROUP = 10000
 
 
 def png_canvas(size, pixels_wide):
@@ -172,21 +173,23 @@ def _draw_layer(canvas, dots, scale, pen_width, fill):
     Round discs, and their copies across a wrapping page's edges, are inked where a fine pixel's centre lies
     inside one (``stipple.io.raster.disc_mask``): a disc's ink is its area on average at any size. Pillow's
     ``ellipse`` was off by -11 to +13 % for discs of 0.3-1.2 output pixels (the dots of a dense stipple at the
-    default PNG width), which made tone-true pictures light.
+    default PNG width), which made tone-true pictures light. Pen paths are the union of such discs along them
+    (``stroke_centres``): Pillow's lines, their width rounded to whole pixels and their caps a pixel short, drew
+    a point pen's preview 3 % lighter than its SVG.
     """
-    if dots.paths is None and dots.squash is None:
-        canvas.paste(fill, mask=_disc_mask(dots, scale, canvas.size))
-        return
-    draw = ImageDraw.Draw(canvas)
     if dots.paths is not None:
-        stroke = max(int(round(pen_width * scale)), 1)
-        cap = stroke / 2
-        for path in dots.paths:
-            draw.line([(z.real * scale, z.imag * scale) for z in path], fill=fill, width=stroke, joint="curve")
-            # Round caps, as the SVG's stroke-linecap: a "point" dot inks a pen-wide disc, not a sliver.
-            for end in (path[0] * scale, path[-1] * scale):
-                draw.ellipse((end.real - cap, end.imag - cap, end.real + cap - 1, end.imag + cap - 1), fill=fill)
+        # A group of paths at a time: a pen circle is about a hundred discs.
+        for start in range(0, len(dots.paths), PATHS_PER_GROUP):
+            centres = stroke_centres(dots.paths[start : start + PATHS_PER_GROUP], pen_width)
+            radii = np.full(len(centres), pen_width / 2)
+            canvas.paste(fill, mask=_disc_mask(centres, radii, scale, canvas.size))
+    elif dots.squash is None:
+        centres, radii = np.asarray(dots.centres, dtype=float).reshape(-1, 2), np.asarray(dots.radii, dtype=float)
+        if dots.copies is not None:
+            centres, radii = np.concatenate([centres, dots.copies[0]]), np.concatenate([radii, dots.copies[1]])
+        canvas.paste(fill, mask=_disc_mask(centres, radii, scale, canvas.size))
     else:
+        draw = ImageDraw.Draw(canvas)
         for centre, radius, squash, angle in zip(
             dots.centres * scale, dots.radii * scale, dots.squash, dots.angle, strict=True
         ):
@@ -195,12 +198,26 @@ def _draw_layer(canvas, dots, scale, pen_width, fill):
             )
 
 
-def _disc_mask(dots, scale, canvas_size):
-    """``disc_mask`` of a layer's discs and copies on the supersampled canvas, as a ``PIL.Image`` "L" (0 or 255),
-    drawn in bands of rows (the scanline counts are 4 bytes a pixel)."""
-    centres, radii = np.asarray(dots.centres, dtype=float).reshape(-1, 2), np.asarray(dots.radii, dtype=float)
-    if dots.copies is not None:
-        centres, radii = np.concatenate([centres, dots.copies[0]]), np.concatenate([radii, dots.copies[1]])
+def stroke_centres(paths, pen_width):
+    """Centres of discs ``pen_width`` wide along each pen path (complex vertices), at most an eighth of the width
+    apart, both ends included: their union is the path stroked with round caps and joins, as the SVG's, its
+    width short by less than 0.5 % between two discs."""
+    spacing = pen_width / 8
+    paths = [np.asarray(path, dtype=complex) for path in paths if len(path)]
+    if not paths:
+        return np.zeros((0, 2))
+    starts = np.concatenate([path[:-1] if len(path) > 1 else path for path in paths])
+    ends = np.concatenate([path[1:] if len(path) > 1 else path for path in paths])
+    steps = np.maximum(np.ceil(np.abs(ends - starts) / spacing).astype(np.int64), 1)
+    segment = np.repeat(np.arange(len(steps)), steps + 1)
+    fraction = (np.arange(len(segment)) - np.repeat(np.cumsum(steps + 1) - (steps + 1), steps + 1)) / steps[segment]
+    points = starts[segment] + fraction * (ends[segment] - starts[segment])
+    return np.column_stack([points.real, points.imag])
+
+
+def _disc_mask(centres, radii, scale, canvas_size):
+    """``disc_mask`` of discs on the supersampled canvas, as a ``PIL.Image`` "L" (0 or 255), drawn in bands of
+    rows (the scanline counts are 4 bytes a pixel)."""
     columns, rows = canvas_size
     mask = np.zeros((rows, columns), dtype=np.uint8)
     band = max(1, MASK_BAND_PIXELS // columns)
