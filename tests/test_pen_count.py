@@ -104,6 +104,50 @@ def test_a_given_count_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp
     assert (line in result.output) == noted, result.output
 
 
+def test_too_few_point_dots_for_the_ink_get_a_note_with_the_count_that_carries_it(tmp_path):
+    """A point pen's dot inks a fixed area: -M 200 of a 0.5 mm pen on a 0.4 gray page drew it about a seventh as
+    dark, with only the note about the darkest tones (the page has none)."""
+    image = flat_gray(tmp_path, 0.4)
+    arguments = [
+        "torus",
+        str(image),
+        "--iterations",
+        "3",
+        "--dot-style",
+        "point",
+        "--pen-width",
+        "0.5mm",
+        "--width",
+        "20mm",
+    ]
+    few = CliRunner().invoke(main, [*arguments, "-M", "200", "-o", str(tmp_path / "few.svg")])
+    assert few.exit_code == 0 and "point dots of a 0.5 mm pen ink" in few.output, few.output
+    tone = int(few.output.split("about ")[1].split(")")[0])
+    assert tone == pytest.approx(0.4 * 20 * 20 / ((np.pi / 4 + 0.1) * 0.25), rel=0.01)  # a 20 mm square page
+    enough = CliRunner().invoke(main, [*arguments, "-M", str(tone), "-o", str(tmp_path / "enough.svg")])
+    assert enough.exit_code == 0 and "point dots" not in enough.output
+
+
+def test_colour_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp_path):
+    """As stipple torus: a colour drawing's inks together darker than the no-touch packing reaches got no note."""
+    path = tmp_path / "dark.png"
+    Image.fromarray(np.full((12, 16, 3), (20, 30, 90), dtype=np.uint8)).save(path)
+    arguments = [
+        "colour",
+        str(path),
+        "-M",
+        "300",
+        "--iterations",
+        "3",
+        "--style",
+        "plotter",
+        "-o",
+        str(tmp_path / "c.svg"),
+    ]
+    result = CliRunner().invoke(main, arguments)
+    assert result.exit_code == 0 and f"tones darker than {reachable_tone('filled'):.0%}" in result.output, result.output
+
+
 @pytest.mark.parametrize(
     "extra, message",
     [

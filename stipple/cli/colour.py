@@ -6,7 +6,7 @@ import click
 
 from ..errors import StippleError
 from .defaults import INITS
-from .options import backend_option, common_options, palette_options, resolve_input, without
+from .options import backend_option, common_options, given_count_hint, palette_options, resolve_input, without
 from .recipes import colour_recipe, run_pipeline
 
 
@@ -29,6 +29,11 @@ def colour(ctx, image, **options):
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
-        run_pipeline(stipple_colour, image, colour_recipe(options), options, [("image", image)], started)
+        recipe, inputs = colour_recipe(options), [("image", image)]
+
+        def inspect(darkness):
+            given_count_hint(darkness, options)
+
+        run_pipeline(stipple_colour, image, recipe, options, inputs, started, inspect=inspect)
     except StippleError as error:
         raise click.ClickException(str(error)) from None

@@ -368,3 +368,14 @@ def warn_outside(count, total, size, consequence):
             f"(made for another image?); {consequence}",
             err=True,
         )
+
+
+def given_count_hint(darkness, options):
+    """Notes on stderr for a given -M drawn in a pen or plotter style (``stipple.render.pen_count.given_count_notes``:
+    tones its dots cannot reach, a point pen's dots too few for the image's ink); -M auto says its own."""
+    if options["quiet"] or options["n_points"] == "auto":
+        return
+    from ..render.pen_count import given_count_notes
+
+    for line in given_count_notes(darkness, options["n_points"], render_settings(options)):
+        click.echo(f"stipple: note: {line}", err=True)

@@ -5,7 +5,7 @@ import time
 import click
 
 from ..errors import StippleError
-from .options import backend_option, common_options, init_input, palette_options, resolve_input
+from .options import backend_option, common_options, given_count_hint, init_input, palette_options, resolve_input
 from .recipes import colour_recipe, run_pipeline, torus_recipe
 
 
@@ -91,7 +91,7 @@ def tone_hints(weights, options):
         return
     import numpy as np
 
-    pen_reach_hint(weights, options)
+    given_count_hint(weights, options)
     if options["levels"] is not None or options["invert"]:
         return
 
@@ -107,27 +107,5 @@ def tone_hints(weights, options):
         click.echo(
             f"stipple: note: the image is {weights.mean():.0%} dark on average; drawn dark as it is (--invert draws "
             "its light parts as white dots on black: docs/picture.md)",
-            err=True,
-        )
-
-
-def pen_reach_hint(weights, options):
-    """A line when the plotter style (or a pen's dot style) draws a given -M: its dots never touch, so tones
-    darker than ``stipple.render.pen_count.reachable_tone`` come out lighter (a dark photo's darkest tenth 0.44
-    for 0.9), which -M auto says and an explicit -M did not."""
-    from ..render.pen_count import PEN_STYLES, reachable_tone
-
-    pen = options["dot_style"] in PEN_STYLES
-    fixed = options.get("dot_radius") is not None  # every dot that radius, touching or not
-    if options["n_points"] == "auto" or fixed or not (pen or options["style"] == "plotter"):
-        return
-    import numpy as np
-
-    reachable = reachable_tone(options["dot_style"] if pen else "filled")
-    darkest = float(np.percentile(weights, 99))
-    if darkest > reachable:
-        click.echo(
-            f"stipple: note: tones darker than {reachable:.0%} will be lighter: the plotter style's dots never touch "
-            f"(the image's darkest 1 % is {darkest:.0%} dark; the default tone style with discs draws them)",
             err=True,
         )

@@ -64,9 +64,10 @@ def tone_settings(densities, rgb, separation):
     return {"coverages": coverages, "target": print_target(rgb, separation), "ink": union_ink(densities)}
 
 
-def stipple_colour(image, formats, recipe, *, session=None, announce=None):
+def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announce=None):
     """Separate ``image`` (a path) into inks, optimise their dots jointly and draw them in every format of
-    ``formats``; ``session`` and ``announce`` as for ``stipple.pipelines.image.stipple_image``.
+    ``formats``; ``session`` and ``announce`` as for ``stipple.pipelines.image.stipple_image``, ``inspect``
+    is shown the inks' darkness together (H, W) once they are separated.
 
     Returns
     -------
@@ -81,6 +82,8 @@ def stipple_colour(image, formats, recipe, *, session=None, announce=None):
         canvas = rgb.shape[1::-1]
         check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
     layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), **settings)
+    if inspect is not None:
+        inspect(np.clip(sum(layer.density for layer in layers), 0.0, 1.0))
     if announce is not None:
         announce(problem)
     result = run(problem, **{**recipe.solve, **(session or {})})

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import StippleError
 from ..halftone import MAX_POINTS
+from ..io.units import UNITS
 from .dots import TOUCH_FRACTION
 
 PEN_STYLES = ("point", "filled", "circle")
@@ -122,6 +123,42 @@ def auto_count(darkness, paper_width, style, pen_width):
         )
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
     return PenCount(count, tone_points, packing_points, area, ink, paper, float(reachable), darkest)
+
+
+# A point pen's dots with a given -M that carry less than this share of the image's ink get a note.
+LIGHT_SHARE = 0.8
+
+
+def given_count_notes(darkness, n_points, draw):
+    """Lines about a drawing of ``n_points`` dots in a pen or plotter style (``draw``: the render settings): tones
+    darker than the no-touch packing reaches come out lighter (as ``-M auto`` says), and a point pen's dots (a
+    fixed area each) that carry far less than the image's ink draw a lighter picture (``-M 8000`` of a 0.5 mm pen
+    drew a 2:1 photo's mean darkness 0.61 as 0.08)."""
+    style = draw["dot_style"]
+    if draw.get("dot_radius") is not None or not (style in PEN_STYLES or draw.get("style") == "plotter"):
+        return []
+    darkness = np.asarray(darkness, dtype=np.float64)
+    lines = []
+    reachable = reachable_tone(style if style in PEN_STYLES else "filled")
+    darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
+    if darkest > reachable:
+        lines.append(
+            f"tones darker than {reachable:.0%} will be lighter: the plotter style's dots never touch (the image's "
+            f"darkest 1 % is {darkest:.0%} dark; the default tone style with discs draws them)"
+        )
+    if style == "point":
+        paper_width, pen_width = (value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
+        rows, columns = darkness.shape
+        paper = paper_width * paper_width * rows / columns
+        drawn = n_points * pen_dot(style, pen_width)[0] / paper
+        tone_points = darkness.mean() * paper / pen_dot(style, pen_width)[0]
+        if n_points < LIGHT_SHARE * tone_points:
+            lines.append(
+                f"{n_points} point dots of a {pen_width:g} mm pen ink {drawn:.0%} of the paper for the image's "
+                f"{darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that carry its ink, "
+                f"about {int(round(tone_points))})"
+            )
+    return lines
 
 
 def ink_darkness(image, separation="gray", black=1.0):
