@@ -1,3 +1,5 @@
+import sys
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -144,3 +146,22 @@ def test_verbose_on_the_sphere_names_the_adjoints_one_thread(tmp_path):
     args = ["sphere", "builtin:gaussians", "-M", 200, "--iterations", 2, "--threads", 2, "-v", "-o", tmp_path / "d.csv"]
     result = run(args)
     assert result.exit_code == 0 and "threads=2 (transforms 2, adjoints 1)" in result.output, result.output
+
+
+def test_the_progress_bar_counts_each_phase_without_the_cap_as_its_total(monkeypatch):
+    """A run's phases each count from 0 and mostly stop when the energy settles: the bar showed the 2000-iteration
+    cap as its total (113/2000, 1:30 to go, for a 5 s run) and its count fell back between phases."""
+    import io
+    from types import SimpleNamespace
+
+    from stipple.cli.supervise import Progress
+
+    stream = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", stream)
+    progress = Progress(2000, enabled=True)
+    for phase in (37, 5):
+        for iteration in range(phase):
+            progress(SimpleNamespace(iteration=iteration, energy=1.0, relative_gradient_norm=0.5))
+    progress.close()
+    shown = [line for line in stream.getvalue().replace("\r", "\n").splitlines() if "it" in line]
+    assert "2000" not in stream.getvalue() and shown[-1].lstrip().startswith("4it"), shown[-3:]
