@@ -125,6 +125,8 @@ def test_render_warns_when_points_lie_outside_the_canvas_given(torus_csv, tmp_pa
     assert smaller.exit_code == 0 and "points lie outside the 12×8 image" in smaller.output
     same = run(["render", points, "--like", image, "-o", tmp_path / "y.svg"])
     assert same.exit_code == 0 and "outside" not in same.output
+    both = run(["render", points, "--like", image, "--size", "12,8", "-o", tmp_path / "z.svg"])  # --size was ignored
+    assert both.exit_code == 1 and "give --like or --size, not both" in both.output
 
 
 def test_render_refuses_a_video_csv_of_several_frames_and_draws_one_frame(tmp_path):

@@ -118,7 +118,7 @@ def redraw(pixels, names, formats, like, size, separation, options):
     if options["invert"] or options.get("color") is not None or options.get("background") is not None:
         raise StippleError("--invert, --color and --background are for one-colour dots; inks print on white paper")
     if like is not None and size is not None:
-        raise StippleError("give --like or --size, not both")
+        raise StippleError("give --like or --size, not both (--like's image has its own size)")
     palette, black = separation
     if like is None and (palette is not None or black is not None):
         raise StippleError("--palette and --black separate --like's image: give --like, the colour image of the points")
