@@ -118,5 +118,13 @@ def _reduce(values, rows, columns, s):
     """Sums of ``s x s`` blocks of a ``uint8`` image (values up to 255), as ``float32``."""
     if s == 1:
         return values.astype(np.float32)
-    strips = values.reshape(rows, s, columns * s).sum(axis=1, dtype=np.uint16 if s * 255 < 65536 else np.uint32)
-    return strips.reshape(rows, columns, s).sum(axis=2, dtype=np.uint32).astype(np.float32)
+    # Strided additions: numpy's sum over a short axis took six times as long (a colour picture's 28 drawings
+    # of its inks on the analysis grid spent 1.3 s here).
+    blocks = values.reshape(rows, s, columns * s)
+    strips = blocks[:, 0].astype(np.uint16 if s * 255 < 65536 else np.uint32)
+    for k in range(1, s):
+        strips += blocks[:, k]
+    out = strips[:, 0::s].astype(np.float32)
+    for k in range(1, s):
+        out += strips[:, k::s]
+    return out
