@@ -347,3 +347,16 @@ def test_line_runs_along_no_edge_the_image_does_not_darken(name):
         assert line_share <= 1.25 * dark_share + 3 / count, edge
     segments = np.linalg.norm(np.roll(pixels, -1, axis=0) - pixels, axis=1)
     assert segments.max() <= 1.05 * segments.mean()
+
+
+def test_the_lines_message_counts_every_phases_iterations():
+    """The line runs in phases (the penalty grows between them): its summary gave the last phase's count alone
+    ("reached 12 iterations" for --iterations 50 and 110 in all)."""
+    import re
+
+    image = np.tile(np.linspace(0.1, 0.9, 48), (32, 1))
+    steps = []
+    result = draw_line(image, 120, iterations=20, callback=lambda state: steps.append(state.iteration) and False)
+    phases = sum(1 for step in steps if step == 0)
+    total, counted = re.match(r"(\d+) iterations in (\d+) phases, the last: ", result.message).groups()
+    assert int(counted) == phases > 1 and int(total) == sum(1 for step in steps if step > 0)

@@ -108,15 +108,16 @@ def draw_line(
     }
     saving = {"path": checkpoint, "seconds": checkpoint_seconds, "iterations": checkpoint_iterations}
     ends = (started, time_limit)
-    problem, penalty, result = tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends)
-    return finished(result, problem, penalty, started)
+    counts = [result.iterations]
+    problem, penalty, result = tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends, counts)
+    return finished(result, problem, penalty, started, counts)
 
 
-def tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends):
+def tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends, counts):
     """The later phases: while a segment is off ``h`` by more than ``constraint_tol`` (and the run was neither
     stopped nor out of time), the penalty's weight times ``PENALTY_GROWTH`` and ``phase["iterations"]`` more
-    CG iterations from the last points, each phase saving its own checkpoint. Returns the last phase's problem,
-    penalty and result."""
+    CG iterations from the last points, each phase saving its own checkpoint and appending its iterations to
+    ``counts``. Returns the last phase's problem, penalty and result."""
     started, time_limit = ends
     for _ in range(MAX_PHASES):
         if constraints_hold(problem, result.points, constraint_tol) or result.status == "stopped":
@@ -140,13 +141,17 @@ def tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends
         )
         if saver is not None:
             saver.save(result.state)
+        counts.append(result.iterations)
     return problem, penalty, result
 
 
-def finished(result, problem, penalty, started):
+def finished(result, problem, penalty, started, counts):
     """The last phase's result with the whole run's seconds, its problem and penalty, the segment lengths in
-    pixels, and the vertices in unit coordinates of the image."""
+    pixels, and the vertices in unit coordinates of the image; with several phases its message counts all their
+    iterations (``counts``), not only the last one's."""
     result.seconds = time.perf_counter() - started
+    if len(counts) > 1:
+        result.message = f"{sum(counts)} iterations in {len(counts)} phases, the last: {result.message}"
     result.problem, result.penalty = problem, penalty
     problem.speed.set_points(result.points)
     result.segment_lengths = problem.speed.segment_lengths() * problem.pixels_per_unit
