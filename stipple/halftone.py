@@ -271,17 +271,9 @@ def run(
     return result
 
 
-# ``tol``'s reference for the stratified start: the root mean square of the gradient norm over this many draws of
-# i.i.d. samples. One draw's norm is set by its random low frequencies (a 1:4 image, seeds 0/1/2: 3.0e-6, 1.9e-6,
-# 4.4e-6; M = 10^6: 3.7e-8 and 8.5e-8), and a run whose draw was large stopped by --tol where the same image
-# transposed settled (a 1:20 strip after 54 iterations, p01 0.665; now 81 and 0.681).
-REFERENCE_DRAWS = 4
-
-
 def _start_state(problem, init, seed, levels, time_limit, callback):
     """CG's first state from ``init`` (the coarse-to-fine start for "stratified" where the problem has levels and
-    ``levels`` asks for it); ``tol``'s reference is the gradient norm at i.i.d. samples for the stratified start
-    (``reference_norm``)."""
+    ``levels`` asks for it); ``tol``'s reference is the gradient norm at i.i.d. samples for the stratified start."""
     rng = np.random.default_rng(seed)
     stratified = isinstance(init, str) and init == "stratified" and problem.stratified is not None
     if stratified and levels and problem.level is not None:
@@ -291,7 +283,7 @@ def _start_state(problem, init, seed, levels, time_limit, callback):
         start = initial_points(problem, init, rng)
     reference = None
     if stratified:
-        reference = reference_norm(problem, rng)
+        reference = gradient_norm(problem, problem.sample(rng, problem.n_points))
     state = initial_state(problem.objective, problem.manifold, start)
     state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
     state.rng_state = json.dumps(rng.bit_generator.state)
@@ -377,18 +369,6 @@ def correction_bandwidth(problem):
 def even_at_least_2(value):
     """``value`` rounded to an even integer, at least 2."""
     return max(2, 2 * int(round(value / 2)))
-
-
-def reference_norm(problem, rng, draws=REFERENCE_DRAWS):
-    """The gradient norm at i.i.d. samples of the density: its root mean square over ``draws`` draws, of the
-    discrepancy's part alone (at i.i.d. samples the near field's pairs change it by under 1 %: 0.4 % at 600 dots,
-    in the fifth digit at M = 10^6, where their search took three quarters of a draw's 3.4 s)."""
-    norms = []
-    for _ in range(draws):
-        points = problem.sample(rng, problem.n_points)
-        problem.discrepancy.set_points(points)
-        norms.append(problem.manifold.norm(points, problem.manifold.riesz(points, problem.discrepancy.gradient())))
-    return float(np.sqrt(np.mean(np.square(norms))))
 
 
 def gradient_norm(problem, points):
