@@ -158,7 +158,7 @@ def test_the_progress_bar_counts_each_phase_without_the_cap_as_its_total(monkeyp
 
     stream = io.StringIO()
     monkeypatch.setattr(sys, "stderr", stream)
-    progress = Progress(2000, enabled=True)
+    progress = Progress(enabled=True)
     for phase in (37, 5):
         for iteration in range(phase):
             progress(SimpleNamespace(iteration=iteration, energy=1.0, relative_gradient_norm=0.5))

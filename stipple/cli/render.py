@@ -73,6 +73,8 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
         settings = render_settings(options)
         angles = parse_view(view)
         formats = [output_format(path) for path in outputs]
+        if like is not None and size is not None:
+            raise StippleError("give --like or --size, not both (--like's image has its own size)")
         with guarded_files([("points", points_source), ("--like image", like)], outputs):
             domain, points, names = read_points(points_source, labels=True)
             if names is not None:
@@ -117,8 +119,6 @@ def redraw(pixels, names, formats, like, size, separation, options):
 
     if options["invert"] or options.get("color") is not None or options.get("background") is not None:
         raise StippleError("--invert, --color and --background are for one-colour dots; inks print on white paper")
-    if like is not None and size is not None:
-        raise StippleError("give --like or --size, not both (--like's image has its own size)")
     palette, black = separation
     if like is None and (palette is not None or black is not None):
         raise StippleError("--palette and --black separate --like's image: give --like, the colour image of the points")

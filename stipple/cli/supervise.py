@@ -20,11 +20,10 @@ class Progress:
 
     A run has phases (the coarse levels, the main run, the spread step, the correction), each counting from 0 and
     most stopping when the energy settles: each phase gets a bar of its own, which shows its count and speed, not
-    a total (the cap ``total`` is rarely reached: a 5 s run showed 113/2000 with 1:30 to go, and its count fell back
-    between phases). The last phase's bar stays."""
+    a total (the iteration cap is rarely reached: a 5 s run showed 113/2000 with 1:30 to go, and its count fell
+    back between phases). The last phase's bar stays."""
 
-    def __init__(self, total, enabled):
-        self.total = total
+    def __init__(self, enabled):
         self.enabled = enabled
         self.bar = None
 
@@ -228,7 +227,7 @@ def supervised(options, launch, stop=None, announce=None):
     if announce is not None:
         announce()
     check_integer("seed", options["seed"], 0, 2**63 - 1)
-    progress = Progress(options["iterations"], not options["quiet"] and sys.stderr.isatty())
+    progress = Progress(not options["quiet"] and sys.stderr.isatty())
     with SIGNALS.deferred() as interruption:
         try:
             result = launch(

@@ -167,7 +167,11 @@ def video_settings(options, shape):
 
 
 class FrameProgress(Progress):
-    """The progress bar over frames (off when quiet or stderr is not a TTY)."""
+    """The progress bar over the ``total`` frames (off when quiet or stderr is not a TTY)."""
+
+    def __init__(self, total, enabled):
+        super().__init__(enabled)
+        self.total = total
 
     def __call__(self, frame):
         if not self.enabled:

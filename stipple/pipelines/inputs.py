@@ -50,8 +50,6 @@ def torus_canvas(pixels, like, size, invert=False):
     if like is None and size is None:
         shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
         return (max(shape[0], 1), max(shape[1], 1)), None, pixels
-    if like is not None and size is not None:
-        raise StippleError("give --like or --size, not both (--like's image has its own size)")
     darkness = None
     if like is not None:
         darkness = load_input(like, invert=invert)
