@@ -155,6 +155,11 @@ def _with_mass(layers):
     return layers
 
 
+def union_darkness(layers):
+    """The inks' darkness together, ``(H, W)`` in [0, 1]: what one pen drawing every ink lays down."""
+    return np.clip(sum(layer.density for layer in layers), 0.0, 1.0)
+
+
 def check_layer_names(names, layers, separation, where="the image"):
     """An error naming the layer ``names`` that are not inks of ``layers`` (``separate``'s of ``where`` into
     ``separation``): saved layered points drawn or judged against the wrong image or palette."""

@@ -283,7 +283,7 @@ def _start_state(problem, init, seed, levels, time_limit, callback):
         start = initial_points(problem, init, rng)
     reference = None
     if stratified:
-        reference = gradient_norm(problem, problem.sample(rng, problem.n_points))
+        reference = iid_gradient_norm(problem, rng)
     state = initial_state(problem.objective, problem.manifold, start)
     state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
     state.rng_state = json.dumps(rng.bit_generator.state)
@@ -369,6 +369,12 @@ def correction_bandwidth(problem):
 def even_at_least_2(value):
     """``value`` rounded to an even integer, at least 2."""
     return max(2, 2 * int(round(value / 2)))
+
+
+def iid_gradient_norm(problem, rng):
+    """``tol``'s reference where a start is not i.i.d.: the gradient norm at i.i.d. samples of the density (a cold
+    run's stratified start, a video's scene cut), so that ``tol`` means what it means from i.i.d. samples."""
+    return gradient_norm(problem, problem.sample(rng, problem.n_points))
 
 
 def gradient_norm(problem, points):

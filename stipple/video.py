@@ -30,6 +30,7 @@ from .halftone import (
     correction_bandwidth,
     even_at_least_2,
     gradient_norm,
+    iid_gradient_norm,
     run,
 )
 from .io.video import frame_fingerprint
@@ -333,7 +334,7 @@ def _cut_tol(problem, pinned, previous, settings):
     start = gradient_norm(pinned, previous)
     if not start > 0:
         return settings.tol
-    iid = gradient_norm(problem, problem.sample(np.random.default_rng(settings.seed), problem.n_points))
+    iid = iid_gradient_norm(problem, np.random.default_rng(settings.seed))
     return min(settings.tol * iid / start, 0.5)
 
 

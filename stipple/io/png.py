@@ -209,8 +209,9 @@ def stroke_centres(paths, pen_width):
     starts = np.concatenate([path[:-1] if len(path) > 1 else path for path in paths])
     ends = np.concatenate([path[1:] if len(path) > 1 else path for path in paths])
     steps = np.maximum(np.ceil(np.abs(ends - starts) / spacing).astype(np.int64), 1)
-    segment = np.repeat(np.arange(len(steps)), steps + 1)
-    fraction = (np.arange(len(segment)) - np.repeat(np.cumsum(steps + 1) - (steps + 1), steps + 1)) / steps[segment]
+    segment = np.repeat(np.arange(len(steps)), steps + 1)  # each disc's segment, steps + 1 discs per segment
+    first = np.cumsum(steps + 1) - (steps + 1)  # each segment's first disc
+    fraction = (np.arange(len(segment)) - first[segment]) / steps[segment]
     points = starts[segment] + fraction * (ends[segment] - starts[segment])
     return np.column_stack([points.real, points.imag])
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate
+from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate, union_darkness
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_canvas, default_png_width
@@ -83,7 +83,7 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
         check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
     layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), **settings)
     if inspect is not None:
-        inspect(np.clip(sum(layer.density for layer in layers), 0.0, 1.0))
+        inspect(union_darkness(layers))
     if announce is not None:
         announce(problem)
     result = run(problem, **{**recipe.solve, **(session or {})})

@@ -150,8 +150,8 @@ def given_count_notes(darkness, n_points, draw):
         paper_width, pen_width = (value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
         rows, columns = darkness.shape
         paper = paper_width * paper_width * rows / columns
-        drawn = n_points * pen_dot(style, pen_width)[0] / paper
-        tone_points = darkness.mean() * paper / pen_dot(style, pen_width)[0]
+        area, _ = pen_dot(style, pen_width)
+        drawn, tone_points = n_points * area / paper, darkness.mean() * paper / area
         if n_points < LIGHT_SHARE * tone_points:
             lines.append(
                 f"{n_points} point dots of a {pen_width:g} mm pen ink {drawn:.0%} of the paper for the image's "
@@ -164,7 +164,7 @@ def given_count_notes(darkness, n_points, draw):
 def ink_darkness(image, separation="gray", black=1.0):
     """The total ink density (H, W) of an image file over its inks (``stipple.colour.separate``): what
     ``auto_count`` counts dots for when every ink is drawn with the same pen."""
-    from ..colour import separate
+    from ..colour import separate, union_darkness
     from ..io.images import load_colour
 
-    return np.clip(sum(layer.density for layer in separate(load_colour(image), separation, black)), 0.0, 1.0)
+    return union_darkness(separate(load_colour(image), separation, black))
