@@ -216,3 +216,23 @@ def test_makefile_example_on_two_images(tmp_path):
         assert text.count("<circle") - text.count('class="copy"') == 150
     again = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path)
     assert "Nothing to be done" in again.stdout or again.stdout.strip() == "" or "is up to date" in again.stdout
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
+def test_makefile_example_deletes_an_interrupted_drawing(tmp_path):
+    """A run stopped by a signal writes the dots it reached and exits non-zero (143 for SIGTERM): make must not
+    keep that SVG as if it were finished, and must redo it next time."""
+    images = tmp_path / "images"
+    images.mkdir()
+    Image.fromarray(np.full((12, 18), 90, dtype=np.uint8)).save(images / "a.png")
+    interrupted = tmp_path / "interrupted.sh"
+    interrupted.write_text(f'#!/bin/sh\n"{sys.executable}" -m stipple "$@"\nexit 143\n')
+    interrupted.chmod(0o755)
+    command = ["make", "-f", str(ROOT / "examples" / "Makefile"), f"IMAGES={images}", f"OUT={tmp_path / 'svg'}"]
+    options = ["POINTS=150", "OPTIONS=-N 16 --iterations 5 --quiet"]
+    failed = subprocess.run([*command, f"STIPPLE={interrupted}", *options], capture_output=True, text=True)
+    assert failed.returncode != 0
+    assert not (tmp_path / "svg" / "a.svg").exists()
+    again = subprocess.run([*command, f"STIPPLE={sys.executable} -m stipple", *options], capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "svg" / "a.svg").read_text().count("<circle") >= 150
