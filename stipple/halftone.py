@@ -238,7 +238,9 @@ def run(
     if resume:
         state = load_checkpoint(checkpoint, problem)
     else:
-        state = _start_state(problem, init, seed, levels, time_limit, callback)
+        state, start_stopped = _start_state(problem, init, seed, levels, time_limit, callback)
+        # A start stopped half-way (the coarse levels) is not the uninterrupted run's: nothing to resume from.
+        saver = None if start_stopped else saver
     corrects = correct and problem.coarse is not None and correction_bandwidth(problem) >= 4 * max(COARSE_LEVELS)[0]
     main_limit = None
     if time_limit is not None:
@@ -273,12 +275,19 @@ def run(
 
 def _start_state(problem, init, seed, levels, time_limit, callback):
     """CG's first state from ``init`` (the coarse-to-fine start for "stratified" where the problem has levels and
-    ``levels`` asks for it); ``tol``'s reference is the gradient norm at i.i.d. samples for the stratified start."""
+    ``levels`` asks for it), and whether ``callback`` stopped the levels; ``tol``'s reference is the gradient norm
+    at i.i.d. samples for the stratified start."""
     rng = np.random.default_rng(seed)
     stratified = isinstance(init, str) and init == "stratified" and problem.stratified is not None
+    stops = []
     if stratified and levels and problem.level is not None:
         share = None if time_limit is None else time_limit * LEVELS_TIME_SHARE
-        start = coarse_to_fine(problem, rng, time_limit=share, callback=callback)
+
+        def watched(state):
+            stops.append(bool(callback(state)))
+            return stops[-1]
+
+        start = coarse_to_fine(problem, rng, time_limit=share, callback=None if callback is None else watched)
     else:
         start = initial_points(problem, init, rng)
     reference = None
@@ -287,7 +296,7 @@ def _start_state(problem, init, seed, levels, time_limit, callback):
     state = initial_state(problem.objective, problem.manifold, start)
     state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference
     state.rng_state = json.dumps(rng.bit_generator.state)
-    return state
+    return state, any(stops)
 
 
 # CG iterations after the spread step (``stipple.spread``), before the low-frequency correction.

@@ -101,3 +101,44 @@ def test_multithreaded_torus_is_bit_reproducible():
     single = points(1)
     assert np.array_equal(points(2), single)
     assert not np.array_equal(runs[0], single), "threads=4 did not take the split path"
+
+
+def test_a_run_stopped_during_its_coarse_levels_leaves_no_checkpoint(tmp_path):
+    """A signal during the coarse-to-fine start stops the levels half-way: their split is not the uninterrupted
+    run's start, so a checkpoint of it would resume to other points. None is written; one stopped in the main run
+    is (the control)."""
+    from stipple import load_density
+    from stipple.halftone import run
+    from stipple.torus import torus_problem
+
+    problem = torus_problem(load_density(IMAGE), 8000, threads=1)
+    during_levels = run(problem, checkpoint=tmp_path / "levels.npz", callback=lambda state: True)
+    assert during_levels.status == "stopped" and during_levels.iterations == 0
+    assert not (tmp_path / "levels.npz").exists()
+    states = []
+
+    def stop_in_main_run(state):
+        states.append(state.iteration)
+        return len(states) > 1 and states[-1] < states[-2]  # the main run restarts the count: stop at its first
+
+    in_main_run = run(problem, checkpoint=tmp_path / "main.npz", callback=stop_in_main_run)
+    assert in_main_run.status == "stopped" and (tmp_path / "main.npz").exists()
+
+
+def test_the_resume_hint_is_given_only_when_a_checkpoint_was_written(tmp_path, monkeypatch, capsys):
+    from types import SimpleNamespace
+
+    from stipple.cli.supervise import finish
+
+    result = SimpleNamespace(iterations=0)
+    options = {"checkpoint": str(tmp_path / "run.npz"), "resume": False, "quiet": False}
+    monkeypatch.setattr(sys, "argv", ["stipple", "torus", "a.png", "--checkpoint", options["checkpoint"]])
+    for written in (False, True):
+        if written:
+            (tmp_path / "run.npz").write_bytes(b"")
+        with pytest.raises(SystemExit) as stopped:
+            finish(result, signal.SIGINT, options, time.perf_counter())
+        assert stopped.value.code == 130
+        message = capsys.readouterr().err
+        assert ("resume with: stipple torus" in message) is written
+        assert ("nothing to resume" in message) is not written

@@ -2,6 +2,7 @@
 before any work, the outputs committed all-or-nothing, and the summary and exit status at the end."""
 
 import contextlib
+import os
 import re
 import shlex
 import signal
@@ -257,9 +258,11 @@ def finish(result, stopped_by, options, started, reached=None, energy=True):
     """
     if stopped_by is not None:
         name = signal.Signals(stopped_by).name
-        if options["checkpoint"]:
+        if options["checkpoint"] and os.path.exists(options["checkpoint"]):
             command = shlex.join(["stipple"] + sys.argv[1:] + ([] if options["resume"] else ["--resume"]))
             hint = f"resume with: {command}"
+        elif options["checkpoint"]:
+            hint = "it stopped before its first checkpoint, so there is nothing to resume: run the command again"
         else:
             hint = "no --checkpoint was given, so the run cannot be resumed"
         reached = f"at iteration {result.iterations}; outputs written" if reached is None else reached
