@@ -120,6 +120,7 @@ def spread_apart(positions, spacing, nearest, step_away, target=None, passes=SPR
         distance, neighbour = nearest(positions)
         if target is None:
             ratios = distance[finite] / spacing[finite]
+            ratios = ratios[np.isfinite(ratios)]  # a dot without a neighbour (M = 1) has none
             target = max(SPREAD_TARGET, float(np.percentile(ratios, SPREAD_PERCENTILE))) if ratios.size else 0.0
         close = np.flatnonzero(finite & (distance < target * np.where(finite, spacing, 0.0)))
         if index == 0:

@@ -360,3 +360,14 @@ def test_sweep_a_read_only_folder_is_refused_by_its_mode(grad, tmp_path):
         assert os.listdir(folder) == []
     finally:
         folder.chmod(0o755)
+
+
+def test_one_dot_and_a_subnormal_map_print_no_python_warnings(grad, tmp_path):
+    """A single dot has no neighbour: the spread step's percentile of an infinite ratio printed a RuntimeWarning.
+    A map whose values span a subnormal number halved its span to 0 and said it had NaN values."""
+    single = stipple("torus", grad, "-M", "1", "-q", "-o", tmp_path / "one.csv")
+    assert single.returncode == 0 and single.stderr == "", single.stderr
+    assert len((tmp_path / "one.csv").read_text().splitlines()) == 2
+    tiny = tmp_path / "tiny.npy"
+    np.save(tiny, np.array([[0.0, 5e-324], [5e-324, 0.0]]))
+    one_line(stipple("sphere", tiny, "-M", "10", "-o", tmp_path / "x.csv"), 1, "tiny.npy: the values span")

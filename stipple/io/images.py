@@ -162,7 +162,10 @@ def rescale(values, value_range=None, name="input"):
                 "sphere for a constant density)"
             )
     # Halving first keeps high - low finite for values near the float64 limits.
-    return np.clip((values / 2 - low / 2) / (high / 2 - low / 2), 0.0, 1.0)
+    span = high / 2 - low / 2
+    if not span > 0:
+        raise StippleError(f"{name}: the values span {high - low:g}, too little to rescale; give --range LO HI")
+    return np.clip((values / 2 - low / 2) / span, 0.0, 1.0)
 
 
 def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=None, name=None):
