@@ -371,3 +371,28 @@ def test_one_dot_and_a_subnormal_map_print_no_python_warnings(grad, tmp_path):
     tiny = tmp_path / "tiny.npy"
     np.save(tiny, np.array([[0.0, 5e-324], [5e-324, 0.0]]))
     one_line(stipple("sphere", tiny, "-M", "10", "-o", tmp_path / "x.csv"), 1, "tiny.npy: the values span")
+
+
+def test_a_colour_image_on_stdin(tmp_path):
+    """README: IMAGE may be '-'. Every colour path said "cannot read -"; the colour run reads its input twice (the
+    inks, then the picture's target colour), which a pipe allows once."""
+    rows, columns = np.mgrid[0:24, 0:36]
+    rgb = np.stack([rows * 10, columns * 7, 255 - rows * 5], axis=-1).astype(np.uint8)
+    image = tmp_path / "colour.png"
+    Image.fromarray(rgb).save(image)
+    data = image.read_bytes()
+
+    def piped(*args):
+        return subprocess.run([sys.executable, "-m", "stipple", *map(str, args)], input=data, capture_output=True)
+
+    fast = ["-M", "200", "-N", "12", "--iterations", "3", "-q"]
+    from_file = subprocess.run(
+        [sys.executable, "-m", "stipple", "colour", image, *fast, "-o", "-"], capture_output=True
+    )
+    from_pipe = piped("colour", "-", *fast, "-o", tmp_path / "dots.csv", "-o", tmp_path / "dots.png")
+    assert from_pipe.returncode == 0, from_pipe.stderr
+    assert (tmp_path / "dots.csv").read_bytes() == from_file.stdout
+    redrawn = piped("render", tmp_path / "dots.csv", "--like", "-", "-o", tmp_path / "again.png")
+    assert redrawn.returncode == 0, redrawn.stderr
+    measured = piped("evaluate", tmp_path / "dots.csv", "-")
+    assert measured.returncode == 0 and b"dots (quota" in measured.stdout, measured.stderr

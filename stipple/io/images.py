@@ -2,14 +2,13 @@
 
 import io
 import math
-import sys
 import warnings
 
 import numpy as np
 from PIL import Image, ImageOps, UnidentifiedImageError
 
 from ..errors import StippleError
-from .sources import read_source
+from .sources import read_source, stdin_stream
 
 NPY_MAGIC = b"\x93NUMPY"
 MAX_NPY_HEADER = 10_000
@@ -281,6 +280,7 @@ def load_colour(source, name=None):
     Gray images give three equal channels; EXIF orientation is applied and Pillow's decompression-bomb guard
     stays on, as for ``load_density``. ``.npy`` arrays are refused (colour needs an image).
     """
+    source = stdin_stream() if source == "-" else source
     name = name or str(getattr(source, "name", source))
     data = read_source(source)
     if not data:
@@ -311,8 +311,4 @@ def image_colour(image, name="input"):
 
 def load_input(source, **options):
     """``load_density`` of a path, or of stdin when ``source`` is ``-``."""
-    if source == "-":
-        stream = io.BytesIO(read_source(sys.stdin.buffer))
-        stream.name = "<stdin>"
-        return load_density(stream, **options)
-    return load_density(source, **options)
+    return load_density(stdin_stream() if source == "-" else source, **options)

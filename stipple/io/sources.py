@@ -1,11 +1,26 @@
 """Bounded reads: the bytes of a path, a stream or stdin, never more than ``MAX_INPUT_BYTES``."""
 
+import io
 import os
 import stat
+import sys
 
 from ..errors import StippleError
 
 MAX_INPUT_BYTES = 1 << 30
+# The last standard input read and its bytes: a command may read its input twice (a colour run's inks, then its
+# picture's target colour), and a pipe can be read once.
+_STDIN = [None, b""]
+
+
+def stdin_stream():
+    """A seekable copy of standard input named ``<stdin>``, read (bounded) once per input stream."""
+    stream = sys.stdin.buffer
+    if _STDIN[0] is not stream:
+        _STDIN[:] = [stream, read_source(stream)]
+    copy = io.BytesIO(_STDIN[1])
+    copy.name = "<stdin>"
+    return copy
 
 
 def read_source(source, limit=None):
