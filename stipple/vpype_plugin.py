@@ -19,7 +19,7 @@ from .line import LINE_ITERATIONS
 from .multiclass import class_slices
 from .pipelines.colour import ink_layers
 from .progressive import order_dots, progressive_colour
-from .render.dots import flat_dots
+from .render.dots import flat_dots, least_pen_reach
 from .render.pen import dot_paths
 from .render.styles import DOT_STYLES
 
@@ -32,7 +32,8 @@ def pen_layers(
     ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
     together cover the union density's mean share of the page), capped at 0.45 × each dot's distance to its
-    nearest dot, and every dot lies inside the image (``stipple.render.dots.flat_dots``). ``order`` "path" draws
+    nearest dot, dots too close for the pen's smallest dot left out (no two dots touch), and every dot lies
+    inside the image (``stipple.render.dots.flat_dots``). ``order`` "path" draws
     each layer along one short pen path, "progressive" in passes, each layer's own (``stipple.progressive``).
     """
     palette = parse_palette(separation)
@@ -49,10 +50,19 @@ def pen_layers(
     scale = width / columns
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
     placed = [(name, colour, points * np.array([columns, rows]) * scale) for name, colour, points in inks]
-    dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width)
-    dots = [order_dots(d, order, passes) for d, passes in zip(dots, counts, strict=True)]
+    reach = None if dot_radius is not None else least_pen_reach(dot_style, pen_width)
+    dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width, pen_reach=reach)
+    dots = [order_dots(d, order, kept_passes(passes, d.kept)) for d, passes in zip(dots, counts, strict=True)]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale
+
+
+def kept_passes(counts, kept):
+    """Dots per pass (``counts``, or None) of the dots ``kept`` (a mask of the layer's, or None for all)."""
+    if counts is None or kept is None:
+        return counts
+    ends = np.cumsum(counts)
+    return [int(kept[end - count : end].sum()) for count, end in zip(counts, ends, strict=True)]
 
 
 @click.command("stipple")

@@ -158,3 +158,33 @@ def test_a_pen_preview_inks_the_area_its_svg_strokes(tmp_path, style, area):
     assert result.exit_code == 0, result.output
     ink = 1 - np.asarray(Image.open(png).convert("L"), dtype=float) / 255
     assert ink.sum() / 100 == pytest.approx(25 * area, rel=0.01)  # 10 × 10 pixels a mm²
+
+
+def test_thin_apart_keeps_a_maximal_set_at_the_distance():
+    from stipple.render.dots import thin_apart
+
+    centres = np.random.default_rng(4).random((600, 2)) * 10
+    kept = thin_apart(centres, 0.5)
+    distances = np.hypot(*(centres[:, None] - centres[None, :]).transpose(2, 0, 1)) + np.eye(600) * 1e9
+    assert distances[np.ix_(kept, kept)].min() >= 0.5  # no two kept dots closer
+    assert np.all(distances[np.ix_(~kept, kept)].min(axis=1) < 0.5)  # every dot left out had a kept one that close
+    assert 0 < (~kept).sum() < 600
+    assert thin_apart(centres, 1e-6).all()
+
+
+@pytest.mark.parametrize("style", ["point", "circle", "filled"])
+def test_pen_dots_never_touch_in_the_darkest_tones(tmp_path, style):
+    """A dark image drawn with a pen: where the stipple's dots are closer than the pen's smallest dot allows, they
+    touched (15001 overlapping pairs of point dots at -M auto on a dark photo); they are left out now."""
+    from stipple.render.flat import torus_drawing
+
+    points = np.random.default_rng(0).random((6000, 2))  # clumpy: many pairs far closer than the pen allows
+    options = dict(width=(60.0, "mm"), dot_style=style, pen_width=(0.4, "mm"), ink=0.6, style="plotter")
+    drawing = torus_drawing(points, (60, 90), **options)
+    (dots,) = drawing.layers
+    pen = drawing.pen_width
+    reach = np.maximum(dots.radii, pen / 2 if style == "point" else pen)
+    gaps = np.hypot(*(dots.centres[:, None] - dots.centres[None, :]).transpose(2, 0, 1)) - (reach[:, None] + reach)
+    np.fill_diagonal(gaps, np.inf)
+    assert gaps.min() > 0
+    assert 1000 < len(dots.centres) < 6000 and any("left out" in note for note in drawing.notes)

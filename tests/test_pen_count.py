@@ -49,8 +49,8 @@ def test_dark_image_gets_the_largest_packing_and_a_note(style):
     area, reach = pen_dot(style, 0.8)
     hexagonal_sites = 400 * 2 / (np.sqrt(3) * (reach / 0.45) ** 2)  # dots of reach r, 0.45 d apart, on 400 mm²
     assert count.capped and count.n_points == int(np.floor(reachable_tone(style) * 400 / area))
-    if style == "point":
-        assert count.n_points == int(np.floor(hexagonal_sites))
+    # the lattice's sites at the spacing that leaves 95 % of an optimised stipple's nearest neighbours apart
+    assert count.n_points == int(np.floor(hexagonal_sites * 0.82**2))
     assert count.n_points < count.tone_points
     assert "lighter" in count.note() and "without touching" in count.reason()
 
@@ -178,7 +178,12 @@ def test_vpype_plugin_auto_count(tmp_path):
         f"stipple -M auto --dot-style point --pen-width 0.5mm --width 20mm --iterations 5 --order path {image}"
     )
     expected = auto_count(np.full((32, 32), 1 - round(255 * 0.7) / 255), 20.0, "point", 0.5).n_points
-    assert sum(len(layer) for layer in document.layers.values()) == expected
+    drawn = sum(len(layer) for layer in document.layers.values())
+    assert 0.9 * expected <= drawn <= expected  # five iterations leave a few dots too close for the pen: left out
+    centres = np.array([line[0] for layer in document.layers.values() for line in layer])
+    nearest = np.min(np.abs(centres[:, None] - centres[None, :]) + np.eye(len(centres)) * 1e9, axis=1)
+    pen = 0.5 / 25.4 * 96
+    assert nearest.min() >= 0.5 * pen / 0.45 * (1 - 1e-9)  # no two point dots (reach: half the pen) touch
     with pytest.raises(Exception, match="whole number or 'auto'"):
         vpype_cli.execute(f"stipple -M lots {image}")
 

@@ -6,6 +6,7 @@ neighbour on the drawing: ``r_tone`` (``pi r^2 M = ink area``) keeps the tone wh
 apart, and two dots ``i, j`` never touch, since ``r_i + r_j <= 0.9 max(d_i, d_j) <= 0.9 |p_i - p_j|``.
 """
 
+import heapq
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,8 @@ class Dots:
     ``radii`` are per dot; a foreshortened dot is an ellipse whose axis along ``angle`` (radians, canvas
     coordinates, y down) is ``squash`` times its radius; ``paths`` are pen paths (``stipple.render.pen``), if any.
     ``copies``, ``(centres, radii)``: on a page that wraps around (a torus's tone picture), the discs' copies
-    across its edges, drawn by the PNG and the SVG (circles of class "copy") too, cut by the page.
+    across its edges, drawn by the PNG and the SVG (circles of class "copy") too, cut by the page. ``kept``: which
+    of the layer's given dots these are, where a pen's dots were thinned (``flat_dots``); None for all.
     """
 
     name: str
@@ -41,6 +43,7 @@ class Dots:
     angle: np.ndarray | None = None
     paths: list | None = None
     copies: tuple | None = None
+    kept: np.ndarray | None = None
 
 
 def nearest_distances(points):
@@ -64,11 +67,14 @@ def inset(centres, size, margin):
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
 
 
-def flat_dots(layers, size, tone_radius=None, radius=None, pen=None):
+def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, pen_reach=None):
     """``Dots`` of layers ``(name, colour, centres)`` on a flat canvas, inset so that none crosses its edge.
 
     With ``radius`` every dot has it; otherwise radii are capped from the spacing of all layers' dots together
     (``capped_radii`` of ``tone_radius``). ``pen`` (a stroke width) widens the margin for pen-drawn dots.
+    ``pen_reach`` (``least_pen_reach``): a pen dot is never smaller than that, so dots closer together than
+    ``pen_reach / TOUCH_FRACTION`` would touch however small their radii; the dots are first thinned to that
+    distance (``thin_apart``, all layers together), and the layers hold only the dots kept.
     """
     margin = max(radius if radius is not None else tone_radius, (pen or 0.0) / 2)
     placed = []
@@ -78,11 +84,53 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None):
     if radius is not None:
         return [Dots(name, colour, c, np.full(len(c), float(radius))) for name, colour, c in placed]
     everything = np.concatenate([c for _, _, c in placed]) if placed else np.zeros((0, 2))
-    radii = np.minimum(capped_radii(nearest_distances(everything), tone_radius), margin_used)
+    kept = np.ones(len(everything), dtype=bool)
+    if pen_reach is not None:
+        kept = thin_apart(everything, pen_reach / TOUCH_FRACTION)
+    radii = np.zeros(len(everything))
+    radii[kept] = np.minimum(capped_radii(nearest_distances(everything[kept]), tone_radius), margin_used)
     ends = np.cumsum([len(c) for _, _, c in placed])
-    return [
-        Dots(name, colour, c, radii[end - len(c) : end]) for (name, colour, c), end in zip(placed, ends, strict=True)
-    ]
+    layers = []
+    for (name, colour, centres), end in zip(placed, ends, strict=True):
+        own = slice(end - len(centres), end)
+        layers.append(Dots(name, colour, centres[kept[own]], radii[own][kept[own]], kept=kept[own]))
+    return layers
+
+
+def least_pen_reach(dot_style, pen):
+    """How far the smallest pen dot of ``dot_style`` inks from its centre, for a pen ``pen`` wide: a "point" is one
+    touch of the pen (half its width); the smallest "circle" or "filled" dot is a pen circle of radius ``pen / 2``,
+    which inks out to the pen's width (``stipple.render.pen_count``)."""
+    return pen / 2 if dot_style == "point" else pen
+
+
+def thin_apart(centres, distance):
+    """A mask of ``centres`` no two of which are closer than ``distance``: while any two are, the dot with the most
+    such neighbours left is left out (the lowest index among equals), which keeps more dots in a dense cluster
+    than taking the dots in turn. Every dot left out has a kept dot within ``distance``."""
+    pairs = cKDTree(centres).query_pairs(distance, output_type="ndarray") if len(centres) > 1 else np.zeros((0, 2))
+    kept = np.ones(len(centres), dtype=bool)
+    if len(pairs) == 0:
+        return kept
+    both = np.concatenate([pairs, pairs[:, ::-1]])
+    both = both[np.argsort(both[:, 0], kind="stable")]
+    starts = np.searchsorted(both[:, 0], np.arange(len(centres) + 1))
+    degree = np.diff(starts)
+    queue = [(-int(degree[dot]), int(dot)) for dot in np.flatnonzero(degree)]
+    heapq.heapify(queue)
+    while queue:
+        negative, dot = heapq.heappop(queue)
+        if not kept[dot] or -negative != degree[dot] or degree[dot] == 0:
+            continue
+        kept[dot] = False
+        for neighbour in both[starts[dot] : starts[dot + 1], 1]:
+            if kept[neighbour]:
+                degree[neighbour] -= 1
+                heapq.heappush(queue, (-int(degree[neighbour]), int(neighbour)))
+    for dot in np.flatnonzero(~kept):  # a dot whose too-close neighbours all went after it comes back
+        if not kept[both[starts[dot] : starts[dot + 1], 1]].any():
+            kept[dot] = True
+    return kept
 
 
 def tone_dots(layers, size, coverages, *, target=None, periodic=False):

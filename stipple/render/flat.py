@@ -5,7 +5,7 @@ import numpy as np
 
 from ..io.png import default_png_width
 from ..io.units import BLACK, WHITE, to_user_units
-from .dots import flat_dots, home_positions, ink_radius, squash_paths, tone_dots
+from .dots import flat_dots, home_positions, ink_radius, least_pen_reach, squash_paths, tone_dots
 from .drawing import Drawing
 from .pen import closed_length, dot_paths
 
@@ -67,10 +67,14 @@ def layered_drawing(
                 (name, colour, home_positions(centres, coverage, (columns, rows), reach))
                 for (name, colour, centres), coverage in zip(placed, coverages, strict=True)
             ]
-        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke)
+        reach = None if stroke is None or radius is not None else least_pen_reach(dot_style, stroke)
+        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke, pen_reach=reach)
         drawn = with_pen_paths(drawn, dot_style, pen)
         margin = _margin(drawn, stroke)
         notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
+        left_out = count - sum(len(dots.centres) for dots in drawn)
+        if left_out:
+            notes.append(f"{left_out} dots left out where the pen's dots would touch (the darkest tones)")
     return Drawing(
         (columns, rows),
         width,
