@@ -66,7 +66,7 @@ class ErrorTarget:
 
     def __call__(self, state):
         if self.discrepancy.residual is None:  # resumed: no transform at the saved points yet
-            return False
+            self.discrepancy.set_points(state.points)
         self.largest = largest_error(self.discrepancy)
         return self.reached
 

@@ -139,13 +139,24 @@ def test_cli_writes_a_full_precision_design_and_resumes(tmp_path):
     out, checkpoint = tmp_path / "d.csv", tmp_path / "d.ckpt"
     base = ["design", "-t", "10", "--threads", "1", "-o", str(out), "--checkpoint", str(checkpoint), "-q"]
     first = CliRunner().invoke(main, base + ["--iterations", "5"])
-    assert first.exit_code == 0, first.output
+    assert first.exit_code == 3 and "> target 1e-10" in first.output  # not a design yet: written, and said
     second = CliRunner().invoke(main, base + ["--resume"])
     assert second.exit_code == 0, second.output
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     assert out.read_text().splitlines()[0] == "x,y,z"
     assert data.shape == (design_points(10), 3)
     assert harmonic_errors(data, 10).max() < 1e-10
+    finished = out.read_bytes()
+    for _ in range(2):  # a finished design resumed: the same file, no step beyond the target
+        again = CliRunner().invoke(main, base + ["--resume"])
+        assert again.exit_code == 0 and out.read_bytes() == finished, again.output
+
+
+def test_cli_exit_code_says_when_the_points_are_not_a_design(tmp_path):
+    """t = 10 has no design of 40 points: the run stalls; a script must tell it from a design (it exited 0)."""
+    result = CliRunner().invoke(main, ["design", "-t", "10", "-M", "40", "--threads", "1", "-q", "-o", "-"])
+    assert result.exit_code == 3
+    assert "not a design" in result.output and "largest error" in result.output
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,6 @@
 """``stipple design``: numerical spherical designs of a given strength."""
 
+import sys
 import time
 
 import click
@@ -17,6 +18,9 @@ from .options import (
     without,
 )
 from .supervise import finish, guarded_files, solve, write_outputs
+
+# The exit code of a run that ended without reaching --error (its points are written).
+NOT_A_DESIGN = 3
 
 
 def design_options(function):
@@ -109,3 +113,8 @@ def design(ctx, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+    if result.status != "converged":
+        # The points reached are written; a script must still be able to tell that they are not a design.
+        if options["quiet"]:
+            click.echo(f"stipple: {result.message}", err=True)
+        sys.exit(NOT_A_DESIGN)
