@@ -396,3 +396,17 @@ def test_a_colour_image_on_stdin(tmp_path):
     assert redrawn.returncode == 0, redrawn.stderr
     measured = piped("evaluate", tmp_path / "dots.csv", "-")
     assert measured.returncode == 0 and b"dots (quota" in measured.stdout, measured.stderr
+
+
+def test_options_that_empty_the_image_or_draw_for_minutes_are_named(tmp_path):
+    """--levels or --gamma that leave no ink said "the image is blank (all white)" of an image with ink; a dot
+    radius of 1 km drew for minutes; stipple line's --iterations said it capped the total (it caps the first
+    phase)."""
+    page = np.full((30, 30), 250, dtype=np.uint8)
+    page[12:16, 4:26] = 235
+    Image.fromarray(page).save(tmp_path / "page.png")
+    one_line(stipple("torus", tmp_path / "page.png", *FAST, "--levels", "0.2,0.8"), 1, "no ink is left under --levels")
+    one_line(stipple("torus", tmp_path / "page.png", *FAST, "--gamma", "1000"), 1, "no ink is left under --gamma")
+    radius = stipple("torus", tmp_path / "page.png", *FAST, "--dot-radius", "1e6mm", "-o", tmp_path / "x.png")
+    one_line(radius, 1, "more than half the drawing's --width")
+    assert "first phase" in stipple("line", "--help").stdout

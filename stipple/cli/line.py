@@ -24,7 +24,7 @@ OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
 # field would do nothing.
 @without("near_field", "safeguard", "dot_radius", "order", "background", "color", "dot_style", "style", "pen_width")
 @click.argument("image", required=False)
-@common_options(iterations=LINE_ITERATIONS, settle=False)
+@common_options(iterations=LINE_ITERATIONS, settle=False, phased=True)
 @click.option(
     "--length",
     type=float,

@@ -37,7 +37,11 @@ def backend_option():
     )
 
 
-def run_options(iterations=2000):
+# ``stipple line`` runs in phases of a growing penalty: its --iterations is the first phase's cap.
+PHASED_ITERATIONS = "CG iterations of the first phase at most; each later phase gets a quarter as many (at least 1)."
+
+
+def run_options(iterations=2000, iterations_help="Maximum total number of CG iterations."):
     """Stopping, reproducibility and speed: shared by every optimising command."""
     return [
         click.option(
@@ -45,7 +49,7 @@ def run_options(iterations=2000):
             type=click.IntRange(min=0),
             default=iterations,
             show_default=True,
-            help="Maximum total number of CG iterations.",
+            help=iterations_help,
         ),
         click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
@@ -136,13 +140,15 @@ class CountOrAuto(click.types.IntParamType):
             self.fail(f"{value!r} is neither a whole number nor 'auto'", param, ctx)
 
 
-def common_options(function=None, *, iterations=2000, settle=True, auto_count=False):
+def common_options(function=None, *, iterations=2000, settle=True, auto_count=False, phased=False):
     """Options shared by ``torus``, ``sphere``, ``line`` and ``colour``: size, stopping, reproducibility, speed,
     the density's transfer, files and outputs. ``@common_options(iterations=K)`` changes the default cap;
     ``settle=False`` leaves out ``--settle`` (for commands whose runs stop otherwise); ``auto_count=True``
-    lets ``-M`` be ``auto``."""
+    lets ``-M`` be ``auto``; ``phased=True`` says what ``--iterations`` caps in phased runs (``stipple line``)."""
     if function is None:
-        return lambda function: common_options(function, iterations=iterations, settle=settle, auto_count=auto_count)
+        return lambda function: common_options(
+            function, iterations=iterations, settle=settle, auto_count=auto_count, phased=phased
+        )
     count_help = (
         "Number of dots, or 'auto': from --pen-width, --dot-style and --width (docs/plotters.md)."
         if auto_count
@@ -199,7 +205,7 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
                 "never; README, Defaults).",
             )
         )
-    runs = run_options(iterations)
+    runs = run_options(iterations, PHASED_ITERATIONS) if phased else run_options(iterations)
     return apply_options(function, [config_option()] + problem + runs + output_options() + session_options())
 
 
@@ -295,7 +301,7 @@ def render_settings(options):
     background, color = options.get("background"), options.get("color")
     return {
         "width": parse_length(options["width"], "width"),
-        "dot_radius": None if options["dot_radius"] is None else parse_length(options["dot_radius"], "dot-radius"),
+        "dot_radius": dot_radius(options),
         "png_width": options["png_width"],
         "background": parse_colour(background, "background") if background else (BLACK if invert else WHITE),
         "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
@@ -379,3 +385,17 @@ def given_count_hint(darkness, options):
 
     for line in given_count_notes(darkness, options["n_points"], render_settings(options)):
         click.echo(f"stipple: note: {line}", err=True)
+
+
+def dot_radius(options):
+    """``--dot-radius`` parsed, at most half the drawing's ``--width`` (a radius of 1 km drew for minutes), or None."""
+    from ..io.units import UNITS, parse_length
+
+    if options["dot_radius"] is None:
+        return None
+    radius, width = parse_length(options["dot_radius"], "dot-radius"), parse_length(options["width"], "width")
+    if radius[0] * UNITS[radius[1]] > 0.5 * width[0] * UNITS[width[1]]:
+        raise StippleError(
+            f"--dot-radius {options['dot_radius']} is more than half the drawing's --width {options['width']}"
+        )
+    return radius

@@ -199,8 +199,24 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
     if data.startswith(NPY_MAGIC):
         values = rescale(check_grid(load_array(data, name), name), value_range, name)
     else:
-        values = 1.0 - stretch_levels(check_grid(load_gray(data, name), name), levels)
-    return _transfer(values, invert, gamma)
+        gray = check_grid(load_gray(data, name), name)
+        values = 1.0 - stretch_levels(gray, levels)
+        if levels is not None and np.any(gray < 1) and not np.any(values > 0):
+            raise StippleError(
+                f"{name}: no ink is left under --levels {_levels_text(levels)}: every pixel is at least as light as "
+                "its white point (a lower WHITE, or --levels auto, keeps the image)"
+            )
+    density = _transfer(values, invert, gamma)
+    if gamma != 1.0 and np.any(values > 0) and not np.any(density > 0):
+        raise StippleError(
+            f"{name}: no ink is left under --gamma {gamma:g}: every darkness rounds to 0 (try a smaller one)"
+        )
+    return density
+
+
+def _levels_text(levels):
+    """``levels`` as the user wrote them: "auto" or BLACK,WHITE."""
+    return levels if levels == "auto" else ",".join(f"{value:g}" for value in levels)
 
 
 def stretch_levels(gray, levels):
