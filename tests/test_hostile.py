@@ -410,3 +410,27 @@ def test_options_that_empty_the_image_or_draw_for_minutes_are_named(tmp_path):
     radius = stipple("torus", tmp_path / "page.png", *FAST, "--dot-radius", "1e6mm", "-o", tmp_path / "x.png")
     one_line(radius, 1, "more than half the drawing's --width")
     assert "first phase" in stipple("line", "--help").stdout
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["torus", "{gray}", "--black", "0.3"], "--black: for runs with --palette"),
+        (["torus", "{gray}", "--union-weight", "5"], "--union-weight: for runs with --palette"),
+        (["torus", "{colour}", "--palette", "cmy", "--black", "0.3"], "--black is for --palette cmyk"),
+        (["colour", "{colour}", "--palette", "gray", "--black", "0.3"], "--black is for --palette cmyk"),
+        (["evaluate", "{dots}", "{gray}", "--black", "0.3"], "are for layered CSVs"),
+        (["evaluate", "{picture}", "{gray}", "--palette", "cmy"], "not for a drawn PICTURE.png"),
+    ],
+)
+def test_options_that_would_be_ignored_are_refused(grad, tmp_path, args, message):
+    """They exited 0 with the same output as without them, while render refused the same misuse."""
+    colour = tmp_path / "colour.png"
+    Image.fromarray(np.dstack([np.full((16, 24), level, np.uint8) for level in (200, 90, 40)])).save(colour)
+    dots, picture = tmp_path / "dots.csv", tmp_path / "dots.png"
+    assert stipple("torus", grad, *FAST, "-o", dots, "-o", picture).returncode == 0
+    names = {"gray": grad, "colour": colour, "dots": dots, "picture": picture}
+    filled = [str(arg).format(**names) for arg in args]
+    extra = [] if args[0] == "evaluate" else [*FAST, "-o", tmp_path / "out.csv"]
+    one_line(stipple(*filled, *extra), 1, message)
+    assert not (tmp_path / "out.csv").exists()

@@ -6,7 +6,15 @@ import click
 
 from ..errors import StippleError
 from .defaults import INITS
-from .options import backend_option, common_options, given_count_hint, palette_options, resolve_input, without
+from .options import (
+    backend_option,
+    check_palette_extras,
+    common_options,
+    given_count_hint,
+    palette_options,
+    resolve_input,
+    without,
+)
 from .recipes import colour_recipe, run_pipeline
 
 
@@ -29,6 +37,7 @@ def colour(ctx, image, **options):
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
+        check_palette_extras(options["palette"], options["black"], options["union_weight"])
         recipe, inputs = colour_recipe(options), [("image", image)]
 
         def inspect(darkness):

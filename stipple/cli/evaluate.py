@@ -106,6 +106,10 @@ def evaluate(
         evaluate_plot(points_source, input_source, json_path, plotter)
         return
     if str(points_source).lower().endswith(".png"):
+        if palette != "cmyk" or black != 1.0:
+            raise click.ClickException(
+                "--palette and --black are for layered CSVs (points), not for a drawn PICTURE.png"
+            )
         picture = {"sigmas": sigmas, "colour": colour, "levels": levels, "inset": inset, "fs_dots": fs_dots}
         evaluate_picture(
             points_source, input_source, json_path, picture, options, spectrum_path or bandwidth or as_line
@@ -123,6 +127,8 @@ def evaluate(
         reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
         with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
             domain, points, names = read_points(points_source, labels=True)
+            if names is None and (palette != "cmyk" or black != 1.0):
+                raise StippleError(f"{points_source}: --palette and --black are for layered CSVs (one ink here)")
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
             if spectrum_path is not None and (domain != "torus" or as_line):

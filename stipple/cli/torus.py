@@ -5,7 +5,15 @@ import time
 import click
 
 from ..errors import StippleError
-from .options import backend_option, common_options, given_count_hint, init_input, palette_options, resolve_input
+from .options import (
+    backend_option,
+    check_palette_extras,
+    common_options,
+    given_count_hint,
+    init_input,
+    palette_options,
+    resolve_input,
+)
 from .recipes import colour_recipe, run_pipeline, torus_recipe
 
 
@@ -50,6 +58,7 @@ def torus(ctx, image, **options):
     if image is None:
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
+        check_palette_extras(options["palette"], options["black"], options["union_weight"])
         if options["palette"] is not None:
             from ..pipelines.colour import stipple_colour
 
