@@ -46,7 +46,7 @@ from .supervise import guarded_files
     default=None,
     help="Pictures: CIELAB or luminance measures (default: CIELAB when INPUT has colour).",
 )
-@click.option("--levels", default=None, help="Pictures: as for the run (auto or BLACK,WHITE).")
+@click.option("--levels", default=None, help="As for the run (auto or BLACK,WHITE).")
 @click.option("--inset", type=float, default=0.0, show_default=True, help="Pictures: undo a drawing's inset (px).")
 @click.option(
     "--floyd-steinberg",
@@ -116,7 +116,8 @@ def evaluate(
         )
         return
     try:
-        check_picture_options_absent(sigmas, colour, levels, inset, fs_dots)
+        check_picture_options_absent(sigmas, colour, inset, fs_dots)
+        options["levels"] = parse_levels(levels)
         check_builtin(input_source)
         options["lon0"] = check_longitude("lon0", lon0)
         check_extension("--json", json_path, ".json")
@@ -163,12 +164,11 @@ def check_builtin(input_source):
         raise StippleError(f"unknown builtin {name!r}: choose from {', '.join('builtin:' + b for b in BUILTINS)}")
 
 
-def check_picture_options_absent(sigmas, colour, levels, inset, fs_dots):
+def check_picture_options_absent(sigmas, colour, inset, fs_dots):
     """Refuse the options that measure a drawn picture when POINTS are given: they would be ignored."""
     given = {
         "--sigma": bool(sigmas),
         "--colour/--gray": colour is not None,
-        "--levels": levels is not None,
         "--inset": inset != 0,
         "--floyd-steinberg": fs_dots is not None,
     }

@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import look_options, parse_view, render_settings, warn_outside
+from .options import look_options, parse_levels, parse_view, render_settings, warn_outside
 from .supervise import guarded_files, plot_order, write_outputs
 
 
@@ -43,6 +43,11 @@ from .supervise import guarded_files, plot_order, write_outputs
     help="Centre LON,LAT of the globe view (equirect: the map's centre longitude).",
 )
 @click.option("--invert", is_flag=True, help="Draw white dots on black.")
+@click.option("--gamma", type=float, default=None, help="One ink's points with --like: the run's --gamma.")
+@click.option("--levels", default=None, help="One ink's points with --like: the run's --levels (auto or BLACK,WHITE).")
+@click.option(
+    "--range", "value_range", type=(float, float), default=None, help="One ink's points with --like: the run's --range."
+)
 @click.option(
     "--palette",
     default=None,
@@ -57,7 +62,9 @@ from .supervise import guarded_files, plot_order, write_outputs
 )
 @look_options
 @click.option("-q", "--quiet", is_flag=True, help="No log lines.")
-def render(points_source, outputs, like, size, coords, projection, view, palette, black, **options):
+def render(
+    points_source, outputs, like, size, coords, projection, view, palette, black, gamma, levels, value_range, **options
+):
     """Render saved POINTS (a stipple CSV; '-' for stdin) without rerunning the optimiser."""
     import numpy as np
 
@@ -75,16 +82,26 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
         formats = [output_format(path) for path in outputs]
         if like is not None and size is not None:
             raise StippleError("give --like or --size, not both (--like's image has its own size)")
+        transfer = {"gamma": gamma, "levels": parse_levels(levels), "value_range": value_range}
+        given = [f"--{name.replace('value_', '')}" for name, value in transfer.items() if value is not None]
+        if given and like is None:
+            raise StippleError(
+                f"{', '.join(given)}: for the tone of --like's image; without --like they would be ignored"
+            )
         with guarded_files([("points", points_source), ("--like image", like)], outputs):
             domain, points, names = read_points(points_source, labels=True)
             if names is not None:
+                if given:
+                    raise StippleError(
+                        f"{', '.join(given)}: for one ink's points (a colour run's are drawn from its inks)"
+                    )
                 files = redraw(points, names, formats, like, size, (palette, black), options)
                 write_outputs(outputs, files)
                 return
             if palette is not None or black is not None:
                 raise StippleError("--palette and --black are for layered points (a CSV with a layer column)")
             if domain == "sphere":
-                if like is not None or size is not None:
+                if like is not None or size is not None or given:
                     raise StippleError(
                         "--like and --size are for torus points (an image's x,y); sphere points are drawn with "
                         "even dots: for a map's tone, give stipple sphere the outputs"
@@ -97,7 +114,11 @@ def render(points_source, outputs, like, size, coords, projection, view, palette
                 )
                 write_outputs(outputs, files)
                 return
-            shape, darkness, wrapped = torus_canvas(points, like, size, options["invert"])
+            transfer = {
+                "invert": options["invert"],
+                **{key: value for key, value in transfer.items() if value is not None},
+            }
+            shape, darkness, wrapped = torus_canvas(points, like, size, transfer)
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             if like is not None or size is not None:
                 warn_beyond(points, shape, options)

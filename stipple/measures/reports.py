@@ -48,9 +48,7 @@ def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
     """The report of ``stipple evaluate --line``: E_N of the vertices, length, segments, the drawn line's PSNR."""
     if domain != "torus" or input_source is None:
         raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
-    weights = load_input(
-        input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
-    )
+    weights = load_input(input_source, **image_transfer(options))
     problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
     return evaluate_line(problem, pixels / np.array([weights.shape[1], weights.shape[0]]), weights)
 
@@ -60,9 +58,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     if domain == "torus":
         if input_source is None:
             raise StippleError("missing INPUT: the image or map the points were made from")
-        weights = load_input(
-            input_source, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
-        )
+        weights = load_input(input_source, **image_transfer(options))
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
         problem = torus_problem(weights, len(points), bandwidth, **MEASURE_OPTIONS)
         return {**evaluate_torus(problem, unit, weights), **outside(points, weights.shape)}
@@ -76,6 +72,12 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     )
     problem = sphere_problem(density, len(points), bandwidth, kernel=kernel, **SPHERE_MEASURE_OPTIONS)
     return evaluate_sphere(problem, points, density)
+
+
+def image_transfer(options):
+    """``load_density``'s keywords for the image the torus points were made from, as for the run."""
+    keys = ("invert", "gamma", "value_range", "levels")
+    return {key: options[key] for key in keys if options.get(key) is not None}
 
 
 def outside(pixels, shape):

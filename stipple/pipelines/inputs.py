@@ -43,16 +43,17 @@ def read_sphere_init(init):
     return points
 
 
-def torus_canvas(pixels, like, size, invert=False):
+def torus_canvas(pixels, like, size, transfer=None):
     """``(shape, darkness, pixels)`` of torus points: the canvas of ``--like`` (and its density, the tone to
-    draw, inverted with ``invert``) or ``--size`` (no density) with the points wrapped onto it, or by default
-    the smallest canvas from the origin that holds every point."""
+    draw, with the run's ``transfer``: ``load_density``'s invert, gamma, levels, value_range) or ``--size`` (no
+    density) with the points wrapped onto it, or by default the smallest canvas from the origin that holds every
+    point."""
     if like is None and size is None:
         shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
         return (max(shape[0], 1), max(shape[1], 1)), None, pixels
     darkness = None
     if like is not None:
-        darkness = load_input(like, invert=invert)
+        darkness = load_input(like, **(transfer or {}))
         shape = darkness.shape
     else:
         shape = parse_size(size)
