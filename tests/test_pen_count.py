@@ -10,7 +10,7 @@ from stipple.cli import main
 from stipple.io.png import render_picture
 from stipple.render.dots import Dots
 from stipple.render.pen import dot_paths
-from stipple.render.pen_count import auto_count, pen_dot, reachable_tone
+from stipple.render.pen_count import auto_count, pen_density, pen_dot, reachable_tone
 
 
 @pytest.mark.parametrize("style", ["point", "filled", "circle"])
@@ -48,9 +48,10 @@ def test_dark_image_gets_the_largest_packing_and_a_note(style):
     count = auto_count(darkness, 20.0, style, 0.8)
     area, reach = pen_dot(style, 0.8)
     hexagonal_sites = 400 * 2 / (np.sqrt(3) * (reach / 0.45) ** 2)  # dots of reach r, 0.45 d apart, on 400 mm²
-    assert count.capped and count.n_points == int(np.floor(reachable_tone(style) * 400 / area))
-    # the lattice's sites at the spacing that leaves 95 % of an optimised stipple's nearest neighbours apart
-    assert count.n_points == int(np.floor(hexagonal_sites * 0.82**2))
+    # the ink of the reachable tone; at most the lattice's sites at the spacing that leaves 95 % of an optimised
+    # stipple's nearest neighbours apart
+    assert count.capped and count.n_points == int(round(reachable_tone(style) * 400 / area))
+    assert count.n_points <= count.packing_points == int(np.floor(hexagonal_sites * 0.82**2))
     assert count.n_points < count.tone_points
     assert "lighter" in count.note() and "without touching" in count.reason()
 
@@ -220,3 +221,36 @@ def test_opaque_layers_drawn_directly_equal_the_composited_masks(colours, rng):
     masks = np.asarray(render_picture(layers, (100, 80), 300, pen_width=0.8, underlay=lambda draw, scale: None))
     np.testing.assert_array_equal(direct, masks)
     assert len(np.unique(direct)) > 3
+
+
+def test_pen_density_clips_only_where_the_dots_would_pack_too_close():
+    """The density the pen's dots are placed by: its densest part over its mean at most what the no-touch packing
+    allows, unchanged below the clip and where nothing is that dense; a constant density is never clipped."""
+    rng = np.random.default_rng(5)
+    darkness = np.clip(rng.random((40, 60)) ** 3 * 1.5, 0, 1)
+    area = pen_dot("point", 0.5)[0]
+    paper = 60.0 * 60.0 * 40 / 60
+    for n_points in (200, 800, 2000):
+        allowed = reachable_tone("point") * paper / (n_points * area)
+        placed = pen_density(darkness, n_points, 60.0, "point", 0.5)
+        if darkness.max() <= allowed * darkness.mean():
+            assert placed is darkness
+            continue
+        level = placed.max()
+        assert level / placed.mean() == pytest.approx(allowed, rel=1e-6)
+        assert np.array_equal(placed[darkness < level], darkness[darkness < level])
+    flat = np.full((10, 10), 0.9)  # far too many dots for the pen: clipped, but still the same (even) density
+    assert np.ptp(pen_density(flat, 10**6, 10.0, "filled", 0.3)) == 0
+
+
+def test_auto_count_in_the_darkest_tones_leaves_no_dot_out(tmp_path):
+    """A dark image at -M auto with a point pen: the dots are placed by the density clipped at the pen's reach, so
+    the drawing needs to leave none out (it left out hundreds, irregularly) and the darks come out at the reach."""
+    rows, columns = np.mgrid[0:48, 0:72]
+    image = tmp_path / "dark.png"
+    Image.fromarray((255 * (0.05 + 0.6 * columns / 72)).astype(np.uint8)).save(image)
+    options = ["-M", "auto", "--dot-style", "point", "--pen-width", "0.5mm", "--width", "40mm", "-q"]
+    result = CliRunner().invoke(main, ["torus", str(image), *options, "-o", str(tmp_path / "d.svg")])
+    assert result.exit_code == 0, result.output
+    text = (tmp_path / "d.svg").read_text()
+    assert "left out" not in text and "-M auto:" in text

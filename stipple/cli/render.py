@@ -71,6 +71,7 @@ def render(
     from ..io.png import check_png_outputs
     from ..pipelines.inputs import read_points, torus_canvas
     from ..pipelines.outputs import sphere_files, torus_files
+    from ..pipelines.pen import placement_density
     from ..render.dots import sphere_canvas
     from ..render.pen import physical_centres
     from ..sphere import lon_lat
@@ -119,6 +120,8 @@ def render(
                 **{key: value for key, value in transfer.items() if value is not None},
             }
             shape, darkness, wrapped = torus_canvas(points, like, size, transfer)
+            if darkness is not None:  # the ink a pen's dots carry, as the run drew them
+                darkness = placement_density(darkness, len(points), settings)
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             if like is not None or size is not None:
                 warn_beyond(points, shape, options)

@@ -11,7 +11,7 @@ from ..torus import DERIVATIVE_EPSILON, torus_problem
 from ..transforms import BACKENDS
 from .inputs import read_torus_init
 from .outputs import torus_files
-from .pen import counted_recipe, order_kind, ordered_points
+from .pen import counted_recipe, order_kind, ordered_points, placement_density
 
 
 @dataclass(frozen=True)
@@ -88,14 +88,15 @@ def stipple_image(image, formats, recipe, *, session=None, inspect=None, announc
     recipe, count = counted_recipe(recipe, weights)
     if count is not None and chosen is not None:
         chosen(count)
-    problem = image_problem(weights, formats, recipe)
+    placed = placement_density(weights, recipe.problem["n_points"], recipe.draw)
+    problem = image_problem(placed, formats, recipe)
     options = {**recipe.solve, **(session or {})}
     init = read_torus_init(options.pop("init", "stratified"), weights.shape)
     if announce is not None:
         announce(problem)
     result = run(problem, init=init, **options)
     points, travel, passes = ordered_points(result.points, problem, weights.shape, recipe)
-    files = torus_files(points, weights.shape, formats, recipe.draw, weights)
+    files = torus_files(points, weights.shape, formats, recipe.draw, placed)
     return ImageOutputs(files, result, travel, passes, count)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..io.units import UNITS
 from ..render.pen import pen_order, physical_centres
-from ..render.pen_count import auto_count
+from ..render.pen_count import PEN_STYLES, auto_count, pen_density
 
 ORDERS = ("path", "progressive")
 
@@ -40,6 +40,17 @@ def counted_recipe(recipe, weights):
         draw={**draw, "notes": (*draw.get("notes", ()), *lines)},
     )
     return recipe, count
+
+
+def placement_density(weights, n_points, draw):
+    """The density ``n_points`` dots drawn with ``draw`` (the render settings) are placed by: ``weights``, or for
+    pen dots in the plotter style (whose dots must never touch) the same clipped where the dots would pack closer
+    than the pen allows (``stipple.render.pen_count.pen_density``); also the ink the drawing's dots carry (a
+    filled dot's radius), in the run's drawing and in ``stipple render --like``."""
+    if draw.get("dot_style") not in PEN_STYLES or draw.get("dot_radius") is not None or draw.get("style") != "plotter":
+        return weights
+    paper, pen = (value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
+    return pen_density(weights, n_points, paper, draw["dot_style"], pen)
 
 
 def ordered_points(points, problem, shape, recipe):

@@ -17,8 +17,10 @@ or are left out (every style), so the tones saturate earlier: at ``NEIGHBOUR_RAT
 (0.49 for filled and circle dots, measured on flat grays: drawn 0.50 for 0.5, 0.44 to 0.57 beyond; 0.56 for
 points, which before the thinning overlapped to draw 0.41, 0.51, 0.62, 0.72, 0.81 for 0.4 to 0.8, touching). That
 coverage ``c_max`` is the darkest tone the pen draws, and at most ``M_pack = c_max A / a`` dots fit on the paper.
-``M = min(M_tone, M_pack)``; tones darker than ``c_max`` come out lighter, and an image darker than that on
-average gets ``M_pack``.
+``-M auto`` counts the ink of the darkness clipped at ``c_max``, ``M = mean(min(w, c_max)) A / a`` (at most
+``M_pack``), and ``pen_density`` places the dots by that clipped density (for a given M, clipped where the dots
+would pack closer than the limit): tones darker than ``c_max`` are drawn at ``c_max``, evenly, without a dot left
+out, and the lighter ones keep their tone.
 """
 
 from dataclasses import dataclass
@@ -58,7 +60,10 @@ class PenCount:
     def reason(self):
         """One line: the chosen M and why."""
         if self.capped:
-            why = f"the most that fit without touching ({self.tone_points} would carry the ink)"
+            why = (
+                f"the ink of the tones the pen reaches without touching, darker ones drawn at "
+                f"{self.reachable:.0%} ({self.tone_points} would carry all the ink)"
+            )
         else:
             why = f"{self.ink_area:.4g} mm² of ink / {self.dot_area:.4g} mm² per pen dot"
         return f"-M auto: {self.n_points} dots, {why}"
@@ -113,7 +118,8 @@ def auto_count(darkness, paper_width, style, pen_width):
     reachable = reachable_tone(style, pen_width)
     tone_points = int(round(ink / area))
     packing_points = int(np.floor(reachable * paper / area))
-    count = min(tone_points, packing_points)
+    # The ink the pen carries: tones beyond its reach drawn at it (placed by ``pen_density``, the same clip).
+    count = min(int(round(float(np.minimum(darkness, reachable).mean()) * paper / area)), packing_points)
     if count < 1:
         raise StippleError(
             f"-M auto: the image's ink ({ink:.3g} mm²) is less than one pen dot ({area:.3g} mm²); give -M"
@@ -125,6 +131,34 @@ def auto_count(darkness, paper_width, style, pen_width):
         )
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
     return PenCount(count, tone_points, packing_points, area, ink, paper, float(reachable), darkest)
+
+
+def pen_density(darkness, n_points, paper_width, style, pen_width):
+    """The density to place ``n_points`` pen dots by (``paper_width`` mm wide, a pen ``pen_width`` mm wide) so
+    that nowhere are they asked to pack closer than the no-touch packing allows: ``darkness`` clipped at the level
+    ``c`` at which the clipped regions' dots cover ``reachable_tone`` (``c / mean(min(w, c))`` is the densest
+    dots' density over the mean; it grows with ``c``, and the packing allows ``reachable_tone * paper / (M a)``).
+    Unchanged where the dots nowhere need to be that dense. Without it the stipple's darkest regions held dots
+    closer than a pen dot allows, which the drawing had to leave out (``stipple.render.dots.thin_apart``),
+    irregularly: a dark photo's darkest tenth came out 0.35 dark, against the 0.56 that the packing reaches."""
+    darkness = np.asarray(darkness, dtype=np.float64)
+    rows, columns = darkness.shape
+    area, _ = pen_dot(style, pen_width)
+    allowed = reachable_tone(style) * paper_width * paper_width * rows / columns / (n_points * area)
+    mean = darkness.mean()
+    if mean <= 0 or darkness.max() <= allowed * mean:
+        return darkness
+    # Bisection of c / mean(min(w, c)) = allowed; as c falls the clip tends to an even density over the inked
+    # pixels, whose ratio (1 / their share) no fewer dots can go below.
+    target = max(allowed, 1.0 / np.mean(darkness > 0))
+    low, high = 0.0, float(darkness.max())
+    for _ in range(60):
+        level = 0.5 * (low + high)
+        if level > target * np.minimum(darkness, level).mean():
+            high = level
+        else:
+            low = level
+    return np.minimum(darkness, low) if low > 0 else darkness
 
 
 # A point pen's dots with a given -M that carry less than this share of the image's ink get a note.
