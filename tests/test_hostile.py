@@ -8,6 +8,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ from safety_helpers import check_refused, snapshot
 from stipple import batch as batch_module
 
 FAST = ["-M", "30", "-N", "8", "--iterations", "2", "-q"]
+ROOT_SAMPLE = Path(__file__).resolve().parents[1] / "samples" / "camera128.png"
 
 
 def stipple(*args, timeout=60):
@@ -455,3 +457,15 @@ def test_render_and_evaluate_take_the_runs_gamma_and_levels(tmp_path):
         assert measured.returncode == 0, measured.stderr
         assert json.loads(measured.stdout)["energy_ratio_to_iid"] < 0.1
     one_line(stipple("render", dots, "--gamma", "2", "-o", tmp_path / "x.png"), 1, "--gamma: for the tone of --like")
+
+
+def test_an_output_under_a_file_and_points_before_the_origin_are_named(tmp_path):
+    """-o FILE/x.csv said "directory ... does not exist" of a file; render without --like/--size drew a point at a
+    negative x off the page, silently."""
+    (tmp_path / "afile").write_text("")
+    one_line(stipple("torus", ROOT_SAMPLE, *FAST, "-o", tmp_path / "afile" / "x.csv"), 1, "is a file, not a directory")
+    points = tmp_path / "neg.csv"
+    points.write_text("x,y\n1,2\n-5,3\n")
+    one_line(stipple("render", points, "-o", tmp_path / "neg.svg"), 1, "1 points lie left of or above the origin")
+    assert not (tmp_path / "neg.svg").exists()
+    assert stipple("render", points, "--size", "10,10", "-o", tmp_path / "neg.svg").returncode == 0

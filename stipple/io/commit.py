@@ -30,6 +30,8 @@ def check_writable(path):
         return
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
+        if os.path.exists(directory):
+            raise StippleError(f"{path}: {directory} is a file, not a directory")
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")

@@ -49,6 +49,11 @@ def torus_canvas(pixels, like, size, transfer=None):
     density) with the points wrapped onto it, or by default the smallest canvas from the origin that holds every
     point."""
     if like is None and size is None:
+        if len(pixels) and pixels.min() < 0:
+            raise StippleError(
+                f"{int((pixels < 0).any(axis=1).sum())} points lie left of or above the origin, off the canvas that "
+                "starts there: give --like IMAGE or --size W,H to wrap them onto the image's canvas"
+            )
         shape = (int(np.ceil(pixels[:, 1].max(initial=1))), int(np.ceil(pixels[:, 0].max(initial=1))))
         return (max(shape[0], 1), max(shape[1], 1)), None, pixels
     darkness = None
