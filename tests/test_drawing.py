@@ -188,3 +188,20 @@ def test_pen_dots_never_touch_in_the_darkest_tones(tmp_path, style):
     np.fill_diagonal(gaps, np.inf)
     assert gaps.min() > 0
     assert 1000 < len(dots.centres) < 6000 and any("left out" in note for note in drawing.notes)
+
+
+def test_the_globe_is_outlined_not_painted_gray(tmp_path):
+    """The orthographic PNG painted the whole globe 8 % gray under the dots: a map's empty parts came out gray
+    (235) and its light tones darker than the map's. Now a ring marks the edge and the empty parts stay white."""
+    lat = np.radians(90 - (np.arange(90) + 0.5) * 2)[:, None]
+    lon = np.radians((np.arange(180) + 0.5) * 2)[None, :]
+    cosine = np.sin(lat) * 0.5 + np.cos(lat) * 0.866 * np.cos(lon - np.radians(60))
+    np.save(tmp_path / "peak.npy", np.exp(-((np.degrees(np.arccos(np.clip(cosine, -1, 1))) / 15) ** 2)))
+    picture = tmp_path / "globe.png"
+    run(["sphere", tmp_path / "peak.npy", "-M", 1500, "--iterations", 10, "--view", "60,30", "-q", "-o", picture])
+    gray = np.asarray(Image.open(picture).convert("L"), dtype=float)
+    y, x = np.mgrid[: gray.shape[0], : gray.shape[1]]
+    r = np.hypot(x - gray.shape[1] / 2, y - gray.shape[0] / 2) / (0.49 * gray.shape[0])
+    far_side = (r > 0.8) & (r < 0.95)  # about 70 degrees from the peak: no dots there
+    assert np.median(gray[far_side]) == 255
+    assert gray[(r > 0.98) & (r < 1.03)].min() < 230  # the ring

@@ -11,6 +11,8 @@ from .raster import disc_mask
 from .units import BLACK, WHITE
 
 SUPERSAMPLE = 4
+# The ink of the ring that marks the globe's edge under an orthographic PNG (``underlay``).
+OUTLINE_INK = 0.3
 MAX_CANVAS_SIDE = 1 << 20
 # Discs are rasterised in bands of about this many fine pixels.
 MASK_BAND_PIXELS = 1 << 22
@@ -134,7 +136,7 @@ def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=Non
     if underlay is not None and layers:
         mask = Image.new("L", canvas_size, 0)
         underlay(ImageDraw.Draw(mask), scale)
-        _paint(planes, _fraction(mask, 0.08), layers[0].colour, "over")
+        _paint(planes, _fraction(mask, OUTLINE_INK), layers[0].colour, "over")
     for dots in layers:
         _paint(planes, _fraction(_coverage(dots, canvas_size, scale, pen_width)), dots.colour, blend)
     bands = [Image.fromarray(np.round(np.clip(plane, 0, 1) * 255).astype(np.uint8), "L") for plane in planes]
