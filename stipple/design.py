@@ -56,6 +56,10 @@ def largest_error(discrepancy):
     return float(np.abs(discrepancy.residual[1:]).max())
 
 
+# Largest errors below this are rounding: a run that stalls there is a design as far as doubles go (t = 20: 6.6e-14).
+ROUNDING_FLOOR = 1e-12
+
+
 class ErrorTarget:
     """A CG callback that stops the run once the largest error is at most ``error``."""
 
@@ -173,7 +177,13 @@ def design_outcome(result, target):
         result.status = "converged"
         result.message = f"largest error {target.largest:.3g} <= {target.error:g} after {result.iterations} iterations"
         return result
-    if result.status == "converged":  # the gradient vanished away from a design: a local minimum
+    if result.status == "converged" and target.largest < ROUNDING_FLOOR:  # as close as double precision gets
+        result.status = "stalled"
+        result.message = (
+            f"stopped at the floating-point floor after {result.iterations} iterations (a design to rounding; "
+            f"a tighter --error than about {ROUNDING_FLOOR:g} cannot be reached in double precision)"
+        )
+    elif result.status == "converged":  # the gradient vanished away from a design: a local minimum
         result.status = "stalled"
         result.message = (
             f"stalled at a local minimum after {result.iterations} iterations (not a design; for small t some "

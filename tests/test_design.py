@@ -175,3 +175,9 @@ def test_cli_bad_input_is_one_line(args, message, tmp_path):
     assert "Traceback" not in result.output
     assert len(result.output.strip().splitlines()) == 1
     assert not (tmp_path / "d.csv").exists()
+
+
+def test_the_rounding_floor_is_not_called_a_local_minimum():
+    """--error 1e-20 stalls at the rounding floor (6.6e-14 for t = 20): it said "local minimum (not a design)"."""
+    floor = CliRunner().invoke(main, ["design", "-t", "20", "--error", "1e-20", "--threads", "1", "-q", "-o", "-"])
+    assert floor.exit_code == 3 and "floating-point floor" in floor.output and "local minimum" not in floor.output
