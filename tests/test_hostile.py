@@ -469,3 +469,21 @@ def test_an_output_under_a_file_and_points_before_the_origin_are_named(tmp_path)
     one_line(stipple("render", points, "-o", tmp_path / "neg.svg"), 1, "1 points lie left of or above the origin")
     assert not (tmp_path / "neg.svg").exists()
     assert stipple("render", points, "--size", "10,10", "-o", tmp_path / "neg.svg").returncode == 0
+
+
+def test_sphere_points_measured_against_another_lon0_are_warned_about(tmp_path):
+    """Points of a peaked map measured with the wrong --lon0 lie where the map has no ink: the nearest-neighbour
+    line came out empty, without a word."""
+    lat = np.radians(90 - (np.arange(45) + 0.5) * 4)[:, None]
+    lon = np.radians((np.arange(90) + 0.5) * 4)[None, :]
+    cosine = np.sin(lat) * 0.5 + np.cos(lat) * 0.866 * np.cos(lon - np.radians(60))
+    np.save(tmp_path / "peak.npy", np.exp(-((np.degrees(np.arccos(np.clip(cosine, -1, 1))) / 15) ** 2)))
+    points = tmp_path / "peak.csv"
+    assert (
+        stipple("sphere", tmp_path / "peak.npy", "-M", "400", "--iterations", "5", "-q", "-o", points).returncode == 0
+    )
+    wrong = stipple("evaluate", points, tmp_path / "peak.npy", "--lon0", "-180")
+    assert wrong.returncode == 0 and "warning: only 0 of 400 points lie where" in wrong.stderr
+    assert "no point lies where the input has ink" in wrong.stdout
+    right = stipple("evaluate", points, tmp_path / "peak.npy")
+    assert right.returncode == 0 and "warning" not in right.stderr

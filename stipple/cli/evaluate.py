@@ -139,6 +139,7 @@ def evaluate(
             )
             count, size = report.get("points_outside", 0), report.get("image_size")
             warn_outside(count, report["points"], size, "the measures wrap them around")
+            warn_unjudged(report, input_source)
             files = []
             if spectrum_path is not None:
                 spectrum = report["spectrum"]
@@ -162,6 +163,19 @@ def check_builtin(input_source):
     name = str(input_source).partition(":")[2]
     if name not in BUILTINS:
         raise StippleError(f"unknown builtin {name!r}: choose from {', '.join('builtin:' + b for b in BUILTINS)}")
+
+
+def warn_unjudged(report, input_source):
+    """A warning when fewer than half of a map's points lie where it is dark enough to judge their spacing (points
+    made for another map, or another --lon0): the nearest-neighbour line was then empty, without a word."""
+    judged = report.get("neighbour_points_judged")
+    if report.get("domain") == "sphere" and input_source is not None and judged is not None:
+        if judged < 0.5 * report["points"]:
+            click.echo(
+                f"stipple: warning: only {judged} of {report['points']} points lie where {input_source} has ink "
+                "(made for another map, or with another --lon0?)",
+                err=True,
+            )
 
 
 def check_picture_options_absent(sigmas, colour, inset, fs_dots):

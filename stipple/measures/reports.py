@@ -134,7 +134,8 @@ def format_report(report):
         lines.append(f"blur sigma {item['sigma']:g} px: PSNR {item['psnr']:.2f} dB, SSIM {item['ssim']:.4f}{binned}")
     if "neighbour_distance_over_hexagonal" in report:
         stats = report["neighbour_distance_over_hexagonal"]
-        lines.append("nearest neighbour / hexagonal spacing: " + ", ".join(f"{k} {v:.3f}" for k, v in stats.items()))
+        judged = ", ".join(f"{k} {v:.3f}" for k, v in stats.items()) or "no point lies where the input has ink"
+        lines.append("nearest neighbour / hexagonal spacing: " + judged)
     for key in ("length_pixels", "max_over_mean_segment", "min_over_mean_segment"):
         if key in report:
             lines.append(f"{key.replace('_', ' ')}: {report[key]:.6g}")
