@@ -90,8 +90,7 @@ def evaluate(
     against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma).
     Given a DRAWING.svg (stipple's or vpype's): the plot's estimate per pen (paths, pen-down length, pen-up
     travel, lifts, time; docs/plotters.md)."""
-    from ..io.png import spectrum_plot
-    from ..measures.reports import evaluation_report, format_report
+    from ..measures.reports import evaluation_report
     from ..pipelines.inputs import read_points
 
     options = {
@@ -140,18 +139,28 @@ def evaluate(
             count, size = report.get("points_outside", 0), report.get("image_size")
             warn_outside(count, report["points"], size, "the measures wrap them around")
             warn_unjudged(report, input_source)
-            files = []
-            if spectrum_path is not None:
-                spectrum = report["spectrum"]
-                plot = spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"])
-                files.append((spectrum_path, plot))
-            if json_path is not None:
-                files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
-            if json_path != "-":
-                files.append(("-", (format_report(report) + "\n").encode()))
-            commit_outputs(files)
+            commit_outputs(report_files(report, json_path, spectrum_path))
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+
+
+def report_files(report, json_path, spectrum_path):
+    """``(path, bytes)`` of the points' report: the spectrum's plot, the JSON, and the text on stdout (unless the
+    JSON goes there)."""
+    from ..io.png import spectrum_plot
+    from ..measures.reports import format_report
+
+    files = []
+    if spectrum_path is not None:
+        spectrum = report["spectrum"]
+        files.append(
+            (spectrum_path, spectrum_plot(spectrum["frequency"], spectrum["power"], spectrum["anisotropy_db"]))
+        )
+    if json_path is not None:
+        files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
+    if json_path != "-":
+        files.append(("-", (format_report(report) + "\n").encode()))
+    return files
 
 
 def check_builtin(input_source):
