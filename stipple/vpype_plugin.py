@@ -58,11 +58,13 @@ def pen_layers(
 
 
 def kept_passes(counts, kept):
-    """Dots per pass (``counts``, or None) of the dots ``kept`` (a mask of the layer's, or None for all)."""
+    """Dots per pass (``counts``, or None) of the dots ``kept`` (a mask of the layer's, or None for all); a pass
+    whose dots were all left out is dropped (an ink's smallest passes have one dot each)."""
     if counts is None or kept is None:
         return counts
     ends = np.cumsum(counts)
-    return [int(kept[end - count : end].sum()) for count, end in zip(counts, ends, strict=True)]
+    passes = [int(kept[end - count : end].sum()) for count, end in zip(counts, ends, strict=True)]
+    return [count for count in passes if count > 0]
 
 
 @click.command("stipple")

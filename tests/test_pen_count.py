@@ -254,3 +254,22 @@ def test_auto_count_in_the_darkest_tones_leaves_no_dot_out(tmp_path):
     assert result.exit_code == 0, result.output
     text = (tmp_path / "d.svg").read_text()
     assert "left out" not in text and "-M auto:" in text
+
+
+def test_vpype_progressive_passes_survive_dots_left_out(tmp_path):
+    """A small ink split into passes of one dot each: when the pen's thinning left out every dot of a pass, the
+    progressive order got an empty pass and raised (argmin of an empty sequence)."""
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    from stipple.vpype_plugin import kept_passes
+
+    assert kept_passes([1, 1, 2, 4], np.array([True, False, False, True, True, False, True, True])) == [1, 1, 3]
+    rgb = np.full((32, 32, 3), 30, np.uint8)
+    rgb[10:13, 10:13] = (20, 60, 60)
+    Image.fromarray(rgb).save(tmp_path / "dark.png")
+    document = vpype_cli.execute(
+        "stipple -M 3000 --iterations 5 --palette cmyk --order progressive --dot-style point --pen-width 0.5mm "
+        f"--width 40mm {tmp_path / 'dark.png'}"
+    )
+    assert 1000 < sum(len(layer) for layer in document.layers.values()) <= 3000

@@ -98,10 +98,12 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, pen_reach=N
 
 
 def least_pen_reach(dot_style, pen):
-    """How far the smallest pen dot of ``dot_style`` inks from its centre, for a pen ``pen`` wide: a "point" is one
-    touch of the pen (half its width); the smallest "circle" or "filled" dot is a pen circle of radius ``pen / 2``,
-    which inks out to the pen's width (``stipple.render.pen_count``)."""
-    return pen / 2 if dot_style == "point" else pen
+    """How far the smallest pen dot of ``dot_style`` inks from its centre, for a pen ``pen`` wide (the paths of
+    ``stipple.render.pen.dot_paths``): a "point" is a stroke a tenth of the pen long, half the pen around it (0.6
+    of the pen on the stroke's side; half the pen is taken, as two points the no-touch distance ``pen / 2 / 0.45``
+    apart still leave a hundredth of the pen between them however their strokes turn); the smallest "circle" is
+    a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot is the point's stroke (0.6)."""
+    return {"point": 0.5, "circle": 0.55, "filled": 0.6}[dot_style] * pen
 
 
 def thin_apart(centres, distance):

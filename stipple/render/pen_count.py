@@ -7,11 +7,12 @@ w^2``; the plotter style's tone radius is then exactly ``w``). M dots carry the 
 total darkness times the paper's area: ``M_tone = mean(w) A / a``.
 
 The plotter style never lets two dots touch: a filled or circle dot's radius is at most ``TOUCH_FRACTION`` of
-its distance to its nearest neighbour, and a pen dot is never smaller than its least reach ``r``
-(``stipple.render.dots.least_pen_reach``: ``w / 2`` for a point, ``w`` for the smallest circle or filled dot), so
-dots closer than ``r / TOUCH_FRACTION`` are thinned out of the drawing (``stipple.render.dots.thin_apart``).
-Packed hexagonally at that limit, dots cover ``a 2 f^2 / (sqrt(3) r^2)`` of the paper (0.83 for points, 0.73 for
-filled and circle dots). An optimised stipple is not a lattice: its nearest neighbours are closer than the
+its distance to its nearest neighbour, and a point dot's reach is ``r = w / 2`` (a filled or circle dot of the
+tone radius for ``-M auto`` reaches ``r = w``); a pen dot is never smaller than its path's least reach
+(``stipple.render.dots.least_pen_reach``), so dots closer than that over ``TOUCH_FRACTION`` are thinned out of
+the drawing (``stipple.render.dots.thin_apart``). Packed hexagonally at the limit ``r / TOUCH_FRACTION``, dots
+cover ``a 2 f^2 / (sqrt(3) r^2)`` of the paper (0.83 for points, 0.73 for filled and circle dots). An optimised
+stipple is not a lattice: its nearest neighbours are closer than the
 hexagonal spacing (5 % of them closer than ``NEIGHBOUR_RATIO`` of it), and there dots shrink (filled and circle)
 or are left out (every style), so the tones saturate earlier: at ``NEIGHBOUR_RATIO^2`` of the lattice's cover
 (0.49 for filled and circle dots, measured on flat grays: drawn 0.50 for 0.5, 0.44 to 0.57 beyond; 0.56 for
@@ -30,7 +31,7 @@ import numpy as np
 from ..errors import StippleError
 from ..halftone import MAX_POINTS
 from ..io.units import UNITS
-from .dots import TOUCH_FRACTION, least_pen_reach
+from .dots import TOUCH_FRACTION
 
 PEN_STYLES = ("point", "filled", "circle")
 # The 5th percentile of nearest-neighbour distance / hexagonal spacing of an optimised stipple (0.822 for 2264
@@ -89,9 +90,9 @@ class PenCount:
 def pen_dot(style, pen_width):
     """``(area, reach)`` in mm² and mm of one pen dot of ``style`` drawn with a pen ``pen_width`` mm wide."""
     if style == "point":
-        return (np.pi / 4 + 0.1) * pen_width**2, least_pen_reach(style, pen_width)
+        return (np.pi / 4 + 0.1) * pen_width**2, pen_width / 2
     if style in ("filled", "circle"):
-        return np.pi * pen_width**2, least_pen_reach(style, pen_width)
+        return np.pi * pen_width**2, pen_width
     raise StippleError(f"-M auto needs a pen dot style ({', '.join(PEN_STYLES)}), not --dot-style {style}")
 
 
