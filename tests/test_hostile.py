@@ -487,3 +487,30 @@ def test_sphere_points_measured_against_another_lon0_are_warned_about(tmp_path):
     assert "no point lies where the input has ink" in wrong.stdout
     right = stipple("evaluate", points, tmp_path / "peak.npy")
     assert right.returncode == 0 and "warning" not in right.stderr
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["evaluate", "{layered}", "{colour}", "--levels", "0.3,0.7"], "--levels: not for layered CSVs"),
+        (["evaluate", "{layered}", "{colour}", "--gamma", "2"], "--gamma: not for layered CSVs"),
+        (["evaluate", "{sphere}", "builtin:gaussians", "--levels", "0.3,0.7"], "--levels is for images"),
+        (["colour", "{colour}", "--palette", "gray", "--union-weight", "5", *FAST], "--union-weight is for several"),
+        (["video", "{frames}", "--black", "0.3", *FAST], "--black: for runs with --palette"),
+        (["render", "-", "--like", "-"], "'-' (stdin) may be given only once"),
+    ],
+)
+def test_more_options_that_would_be_ignored_are_refused(grad, tmp_path, args, message):
+    """The review of the first refusals: these still exited 0 with the output of a run without them."""
+    colour = tmp_path / "colour.png"
+    Image.fromarray(np.dstack([np.full((16, 24), level, np.uint8) for level in (200, 90, 40)])).save(colour)
+    layered, sphere = tmp_path / "layered.csv", tmp_path / "sphere.csv"
+    assert stipple("colour", colour, *FAST, "-o", layered).returncode == 0
+    assert stipple("sphere", "builtin:gaussians", *FAST, "-o", sphere).returncode == 0
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for index in range(2):
+        (frames / f"{index}.png").write_bytes(grad.read_bytes())
+    names = {"frames": frames, "colour": colour, "layered": layered, "sphere": sphere}
+    filled = [str(arg).format(**names) for arg in args]
+    one_line(stipple(*filled, "-o", tmp_path / "out.png") if args[0] == "render" else stipple(*filled), 1, message)

@@ -129,6 +129,7 @@ def evaluate(
             domain, points, names = read_points(points_source, labels=True)
             if names is None and (palette != "cmyk" or black != 1.0):
                 raise StippleError(f"{points_source}: --palette and --black are for layered CSVs (one ink here)")
+            check_transfer_applies(points_source, domain, names, options)
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
             if spectrum_path is not None and (domain != "torus" or as_line):
@@ -172,6 +173,23 @@ def check_builtin(input_source):
     name = str(input_source).partition(":")[2]
     if name not in BUILTINS:
         raise StippleError(f"unknown builtin {name!r}: choose from {', '.join('builtin:' + b for b in BUILTINS)}")
+
+
+def check_transfer_applies(points_source, domain, names, options):
+    """Refuse the density's transfer options where they would be ignored: a layered CSV is measured against the
+    colour image's inks (none of them apply), sphere maps have no --levels."""
+    given = {
+        "--invert": bool(options["invert"]),
+        "--gamma": options["gamma"] != 1.0,
+        "--range": options["value_range"] is not None,
+        "--levels": options.get("levels") is not None,
+    }
+    if names is not None:
+        named = [name for name, present in given.items() if present]
+        if named:
+            raise StippleError(f"{points_source}: {', '.join(named)}: not for layered CSVs (measured by their inks)")
+    elif domain == "sphere" and given["--levels"]:
+        raise StippleError(f"{points_source}: --levels is for images, not for sphere points")
 
 
 def warn_unjudged(report, input_source):

@@ -402,13 +402,18 @@ def dot_radius(options):
 
 
 def check_palette_extras(palette, black, union_weight=1.0):
-    """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both), and
-    ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component)."""
+    """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both),
+    ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component), and
+    ``--union-weight`` with one ink (gray, or one pen colour: the union is that ink)."""
+    inks = None if palette is None else str(palette).strip().lower()
+    one_ink = inks == "gray" or (inks is not None and inks not in ("cmyk", "cmy") and "," not in inks)
+    if one_ink and union_weight != 1.0:
+        raise StippleError(f"--union-weight is for several inks, not --palette {palette}: it would be ignored")
     if palette is None:
         given = [name for name, value in (("--black", black), ("--union-weight", union_weight)) if value != 1.0]
         if given:
             raise StippleError(f"{' and '.join(given)}: for runs with --palette; without it they would be ignored")
-    elif black != 1.0 and str(palette).strip().lower() != "cmyk":
+    elif black != 1.0 and inks != "cmyk":
         raise StippleError(
             f"--black is for --palette cmyk (its black ink), not --palette {palette}: it would be ignored"
         )

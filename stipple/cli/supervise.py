@@ -138,6 +138,9 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=()):
         check_writable(path)
     if list(outputs).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
+    piped = [role for role, path in inputs if path is not None and str(path) == "-"]
+    if len(piped) > 1:
+        raise StippleError(f"'-' (stdin) may be given only once, not for both {' and '.join(piped)}")
     config = click.get_current_context().meta.get("stipple.config")
     inputs = [*inputs, ("config", config)]
     written = [("output", path) for path in outputs] + list(reports) + [("checkpoint", checkpoint)]

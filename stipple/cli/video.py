@@ -10,6 +10,7 @@ from . import supervise
 from .defaults import FRAME_ITERATIONS
 from .options import (
     backend_option,
+    check_palette_extras,
     common_options,
     init_input,
     palette_options,
@@ -139,6 +140,7 @@ def video_settings(options, shape):
     from ..video import VideoSettings
 
     check_integer("seed", options["seed"], 0, 2**63 - 1)
+    check_palette_extras(options["palette"], options["black"], options["union_weight"])
     palette = None if options["palette"] is None else parse_palette(options["palette"])
     if not (np.isfinite(options["union_weight"]) and options["union_weight"] >= 0):
         raise StippleError(f"--union-weight must be a finite non-negative number, not {options['union_weight']!r}")
