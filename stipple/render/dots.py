@@ -106,6 +106,18 @@ def least_pen_reach(dot_style, pen):
     return {"point": 0.5, "circle": 0.55, "filled": 0.6}[dot_style] * pen
 
 
+def thin_dots(dots, distance):
+    """``dots`` (one layer, no paths yet) without the dots that ``thin_apart`` leaves out at ``distance``, and how
+    many it left out."""
+    kept = thin_apart(dots.centres, distance)
+    keep = {name: None if value is None else value[kept] for name, value in vars(dots).items() if name in THINNED}
+    return Dots(dots.name, dots.colour, **keep, kept=kept), int((~kept).sum())
+
+
+# The per-dot fields of ``Dots`` that ``thin_dots`` subsets.
+THINNED = ("centres", "radii", "squash", "angle")
+
+
 def thin_apart(centres, distance):
     """A mask of ``centres`` no two of which are closer than ``distance``: while any two are, the dot with the most
     such neighbours left is left out (the lowest index among equals), which keeps more dots in a dense cluster

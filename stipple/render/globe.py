@@ -7,15 +7,19 @@ from ..io.units import BLACK, WHITE
 from .dots import (
     GLOBE,
     ORTHO_SIZE,
+    TOUCH_FRACTION,
     Dots,
     angular_distances,
     capped_radii,
     equirectangular,
     globe_dots,
     inset,
+    least_pen_reach,
+    nearest_distances,
     orthographic,
     projected_darkness,
     sphere_canvas,
+    thin_dots,
     tone_dots,
 )
 from .drawing import Drawing
@@ -77,6 +81,13 @@ def sphere_drawing(
             f"{int(visible.sum())} of {len(points)} dots on the visible side (orthographic, view "
             f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
         ]
+        if stroke is not None and fixed is None:
+            # Foreshortening brings dots near the limb closer, but not the pen's width: the pen's dots are kept
+            # apart on the drawing itself (thinned, and each dot's radius capped by its drawn nearest distance).
+            drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
+            drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
+            if left_out:
+                notes.append(f"{left_out} dots left out where the pen's dots would touch (near the limb)")
     layers = with_pen_paths([drawn], dot_style, pen)
     return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes)
 
