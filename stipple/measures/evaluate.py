@@ -25,6 +25,7 @@ from ..design import fibonacci_lattice
 from ..halftone import hexagonal_spacing
 from ..sampling import pixel_indices, pixel_positions
 from ..sphere_density import density_at, local_density
+from ..torus import periodic_blur
 
 BLURS = (1.0, 2.0, 4.0)
 # E|psi_l(X)|^2 as it enters sums whose weights depend on the degree only: 1 on the torus (|psi| = 1); on the
@@ -51,10 +52,6 @@ def expected_iid_energy(problem):
     normalised = discrepancy.target / mass
     variance = BASIS_SQUARE[problem.domain] - np.abs(normalised) ** 2
     return float(discrepancy.weight**2 * problem.n_points * np.sum(discrepancy.bandlimited_weights * variance))
-
-
-def periodic_blur(image, sigma):
-    return ndimage.gaussian_filter(image, sigma, mode="wrap")
 
 
 def dot_density(points, shape, mass):
