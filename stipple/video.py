@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.ndimage import distance_transform_edt, gaussian_filter
+from scipy.ndimage import distance_transform_edt
 
 from .colour import palette_label
 from .deformation import deform
@@ -36,7 +36,7 @@ from .halftone import (
 from .io.video import frame_fingerprint
 from .manifolds import PinnedTorus
 from .sampling import pixel_indices
-from .torus import DEFAULT_EPSILON, default_bandwidth, torus_problem
+from .torus import DEFAULT_EPSILON, default_bandwidth, periodic_blur, torus_problem
 from .video_inks import Inks
 from .video_keeper import FrameKeeper
 
@@ -276,8 +276,11 @@ def frame_change(before, weights, n_points):
 
 
 def _blur(values, sigma):
-    """A periodic Gaussian blur of ``sigma`` pixels of an ``(H, W)`` array or of each of a ``(K, H, W)`` stack."""
-    return gaussian_filter(values, (0,) * (np.ndim(values) - 2) + (sigma, sigma), mode="wrap")
+    """A periodic Gaussian blur of ``sigma`` pixels of an ``(H, W)`` array or of each of a ``(K, H, W)`` stack
+    (``stipple.torus.periodic_blur``: through the FFT when wide)."""
+    if np.ndim(values) == 2:
+        return periodic_blur(values, sigma)
+    return np.stack([periodic_blur(layer, sigma) for layer in values])
 
 
 def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=float("inf"), inks=None):
