@@ -14,7 +14,7 @@ least ink among equal fits, so grey takes the black pen rather than three colour
 more than 1 are scaled down to 1. With the pens cyan, magenta, yellow and black this is close to ``cmyk``.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import combinations
 
 import numpy as np
@@ -178,7 +178,21 @@ def palette_label(separation):
     return separation if isinstance(separation, str) else ",".join(name for name, _ in separation)
 
 
-def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.0, union_weight=1.0, **options):
+def placed_layers(layers, placement):
+    """``layers`` with every ink's density scaled where ``placement`` (a function of the inks' density together,
+    their sum) lowers it: all the inks' dots are placed as one stipple of that density, each ink keeping its
+    share at every pixel (a pen's dots clipped at its reach, ``stipple.pipelines.pen.placement_density``)."""
+    union = sum(layer.density for layer in layers)
+    placed = placement(union)
+    if placed is union:
+        return layers
+    scale = np.divide(placed, union, out=np.ones_like(union), where=union > 0)
+    return [replace(layer, density=layer.density * scale) for layer in layers]
+
+
+def colour_problem(
+    rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.0, union_weight=1.0, placement=None, **options
+):
     """The joint halftoning problem of an RGB image's inks: ``(layers, problem)``.
 
     Parameters
@@ -194,6 +208,9 @@ def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.
     union_weight : float
         Factor of the union's term against the inks' (1: Wei's and Schmaltz et al.'s equal weights; 0: each
         ink alone, so dots of different inks may clump). A single ink has no union term.
+    placement : callable, optional
+        The density to place all the dots by, as a function of the inks' together (``placed_layers``); the
+        returned layers carry the scaled densities.
     **options
         ``backend``, ``threads``, ``epsilon``, ``hessian``, ``near_field`` for every term.
 
@@ -205,6 +222,8 @@ def colour_problem(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1.
     if not isinstance(rgb, np.ndarray):
         rgb = load_colour(rgb)
     layers = separate(rgb, separation, black)
+    if placement is not None:
+        layers = placed_layers(layers, placement)
     if not (np.isfinite(union_weight) and union_weight >= 0):
         raise StippleError(f"union weight must be a finite non-negative number, not {union_weight!r}")
     term_weights = [1.0] * len(layers) + [float(union_weight) if len(layers) > 1 else 0.0]
@@ -226,7 +245,7 @@ def halftone_colour(rgb, n_points, bandwidth=None, *, separation="cmyk", black=1
     Ink ``c``'s dots are ``result.points[problem.slices[c]]`` (unit coordinates, x right, y down). ``options``
     are ``colour_problem``'s and ``stipple.halftone.run``'s (``init``, ``seed``, ``tol``, ``iterations``, ...).
     """
-    problem_keys = ("backend", "threads", "epsilon", "hessian", "near_field")
+    problem_keys = ("backend", "threads", "epsilon", "hessian", "near_field", "placement")
     problem_options = {key: options.pop(key) for key in problem_keys if key in options}
     layers, problem = colour_problem(
         rgb, n_points, bandwidth, separation=separation, black=black, union_weight=union_weight, **problem_options

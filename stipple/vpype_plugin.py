@@ -8,6 +8,8 @@ point). Lengths follow vpype's conventions (``200mm``, ``8in``; bare numbers are
 ink's name, colour and the pen width, so ``vpype ... write`` and the AxiDraw software see one pen per layer.
 """
 
+from functools import partial
+
 import click
 import numpy as np
 import vpype as vp
@@ -18,6 +20,7 @@ from .errors import StippleError
 from .line import LINE_ITERATIONS
 from .multiclass import class_slices
 from .pipelines.colour import ink_layers
+from .pipelines.pen import placement_density
 from .progressive import order_dots, progressive_colour
 from .render.dots import flat_dots, least_pen_reach
 from .render.pen import dot_paths
@@ -43,7 +46,9 @@ def pen_layers(
         inks = [(layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, parts, strict=True)]
         ink = sum(layer.density for layer in layers).mean()
     else:
-        layers, problem, result = halftone_colour(image, n_points, separation=palette, **options)
+        draw = {"dot_style": dot_style, "dot_radius": dot_radius, "style": "plotter", "width": (width, "px")}
+        placement = partial(placement_density, n_points=n_points, draw={**draw, "pen_width": (pen_width, "px")})
+        layers, problem, result = halftone_colour(image, n_points, separation=palette, placement=placement, **options)
         inks, ink = ink_layers(layers, problem, result)
         counts = [None] * len(inks)
     rows, columns = layers[0].density.shape

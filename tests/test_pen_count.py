@@ -273,3 +273,22 @@ def test_vpype_progressive_passes_survive_dots_left_out(tmp_path):
         f"--width 40mm {tmp_path / 'dark.png'}"
     )
     assert 1000 < sum(len(layer) for layer in document.layers.values()) <= 3000
+
+
+def test_colour_pen_dots_are_placed_by_the_clipped_density_too(tmp_path):
+    """stipple colour with a pen left 218 dots out of a dark ramp's drawing and drew its darkest tenth lighter than
+    the one before: now all the inks' dots are placed by their density together clipped at the pen's reach, as
+    stipple torus's, and the drawing is the same as stipple torus's of the gray image."""
+    image = tmp_path / "ramp.png"
+    Image.fromarray(np.tile(np.linspace(250, 5, 72).astype(np.uint8), (48, 1))).save(image)
+    pen = ["-M", "2000", "--dot-style", "point", "--pen-width", "0.5mm", "--width", "45mm", "-q"]
+    colour = CliRunner().invoke(main, ["colour", str(image), "--palette", "gray", *pen, "-o", str(tmp_path / "c.svg")])
+    assert colour.exit_code == 0, colour.output
+    assert "left out" not in (tmp_path / "c.svg").read_text()
+    from stipple.colour import placed_layers, separate
+    from stipple.render.pen_count import pen_density
+
+    rgb = np.asarray(Image.open(image).convert("RGB"), dtype=float) / 255
+    (layer,) = placed_layers(separate(rgb, "gray"), lambda union: pen_density(union, 2000, 45.0, "point", 0.5))
+    assert np.allclose(layer.density, pen_density(separate(rgb, "gray")[0].density, 2000, 45.0, "point", 0.5))
+    assert layer.density.max() < separate(rgb, "gray")[0].density.max()  # clipped

@@ -2,6 +2,7 @@
 separation -> joint problem -> solve -> each ink's dots, ordered per pen -> layered drawing -> outputs."""
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -13,6 +14,7 @@ from ..io.units import parse_colour
 from ..render.pen import pen_order, physical_centres
 from .image import ImageOutputs
 from .outputs import layered_files
+from .pen import placement_density
 
 # Canvas-sized images alive at once while the inks' picture is drawn (about 33 bytes a pixel).
 INK_PICTURE_LAYERS = 33
@@ -81,7 +83,8 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
     if ".png" in formats:
         canvas = rgb.shape[1::-1]
         check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
-    layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), **settings)
+    placement = partial(placement_density, n_points=n_points, draw=recipe.draw)
+    layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), placement=placement, **settings)
     if inspect is not None:
         inspect(union_darkness(layers))
     if announce is not None:
