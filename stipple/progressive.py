@@ -207,14 +207,15 @@ def progressive_inks(layers, problem, *, levels=LEVELS, **options):
     return nested, [np.asarray(pass_counts(ink.n_points, len(ink.slices))) for ink in inks]
 
 
-def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=1.0, **options):
+def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_weight=1.0, placement=None, **options):
     """``stipple.colour.halftone_colour`` with each ink's dots in nested levels: ``(layers, result, counts)``.
 
     One ink is ``progressive_problem``'s (no union term); several are ``progressive_inks``'s, the union's term
-    weighted ``union_weight``. ``options`` are ``progressive_problem``'s and ``stipple.halftone.run``'s.
-    ``counts`` are each ink's dots per pass, in array order (the inks one after another, as ``layers``).
+    weighted ``union_weight``. ``placement``: as for ``stipple.colour.colour_problem``. ``options`` are
+    ``progressive_problem``'s and ``stipple.halftone.run``'s. ``counts`` are each ink's dots per pass, in array
+    order (the inks one after another, as ``layers``).
     """
-    from .colour import colour_problem, separate
+    from .colour import colour_problem, placed_layers, separate
     from .halftone import run
     from .io.images import load_colour
 
@@ -222,12 +223,14 @@ def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_wei
     keys = ("backend", "threads", "epsilon", "hessian", "near_field", "levels")
     settings = {key: options.pop(key) for key in keys if key in options}
     layers = separate(rgb, separation, black)
+    if placement is not None:
+        layers = placed_layers(layers, placement)
     if len(layers) == 1:
         problem = progressive_problem(layers[0].density, n_points, **settings)
         return layers, run(problem, **options), [np.asarray(pass_counts(n_points, len(problem.slices)))]
     levels = settings.pop("levels", LEVELS)
     layers, joint = colour_problem(
-        rgb, n_points, separation=separation, black=black, union_weight=union_weight, **settings
+        rgb, n_points, separation=separation, black=black, union_weight=union_weight, placement=placement, **settings
     )
     problem, counts = progressive_inks(layers, joint, levels=levels, **settings)
     return layers, run(problem, **options), counts

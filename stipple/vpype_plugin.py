@@ -40,14 +40,14 @@ def pen_layers(
     each layer along one short pen path, "progressive" in passes, each layer's own (``stipple.progressive``).
     """
     palette = parse_palette(separation)
+    draw = {"dot_style": dot_style, "dot_radius": dot_radius, "style": "plotter", "width": (width, "px")}
+    placement = partial(placement_density, n_points=n_points, draw={**draw, "pen_width": (pen_width, "px")})
     if order == "progressive":
-        layers, result, counts = progressive_colour(image, n_points, separation=palette, **options)
+        layers, result, counts = progressive_colour(image, n_points, separation=palette, placement=placement, **options)
         parts = class_slices([sum(passes) for passes in counts])
         inks = [(layer.name, layer.colour, result.points[part]) for layer, part in zip(layers, parts, strict=True)]
         ink = sum(layer.density for layer in layers).mean()
     else:
-        draw = {"dot_style": dot_style, "dot_radius": dot_radius, "style": "plotter", "width": (width, "px")}
-        placement = partial(placement_density, n_points=n_points, draw={**draw, "pen_width": (pen_width, "px")})
         layers, problem, result = halftone_colour(image, n_points, separation=palette, placement=placement, **options)
         inks, ink = ink_layers(layers, problem, result)
         counts = [None] * len(inks)

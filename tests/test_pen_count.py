@@ -292,3 +292,22 @@ def test_colour_pen_dots_are_placed_by_the_clipped_density_too(tmp_path):
     (layer,) = placed_layers(separate(rgb, "gray"), lambda union: pen_density(union, 2000, 45.0, "point", 0.5))
     assert np.allclose(layer.density, pen_density(separate(rgb, "gray")[0].density, 2000, 45.0, "point", 0.5))
     assert layer.density.max() < separate(rgb, "gray")[0].density.max()  # clipped
+
+
+@pytest.mark.parametrize("separation", ["gray", "cmy"])
+def test_progressive_inks_are_placed_by_the_clipped_density(separation):
+    """The plugin's --order progressive built its problems without the pen's clip (its darkest places relied on
+    leaving dots out): the placement now reaches one ink's levels and several inks' joint problem alike."""
+    from stipple.colour import separate
+    from stipple.progressive import progressive_colour
+
+    red, green = np.meshgrid(np.linspace(0.05, 0.95, 30), np.linspace(0.1, 0.9, 20))
+    rgb = np.stack([red, green, np.full((20, 30), 0.4)], -1)
+    layers, result, _ = progressive_colour(
+        rgb, 400, separation=separation, placement=lambda union: np.minimum(union, 0.3), iterations=2, levels=2
+    )
+    union = sum(layer.density for layer in layers)
+    original = sum(layer.density for layer in separate(rgb, separation))
+    assert union.max() <= 0.3 + 1e-12 < original.max()
+    assert np.allclose(union[original <= 0.3], original[original <= 0.3])
+    assert len(result.points) == 400
