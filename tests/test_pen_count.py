@@ -127,6 +127,11 @@ def test_too_few_point_dots_for_the_ink_get_a_note_with_the_count_that_carries_i
     assert tone == pytest.approx(0.4 * 20 * 20 / ((np.pi / 4 + 0.1) * 0.25), rel=0.01)  # a 20 mm square page
     enough = CliRunner().invoke(main, [*arguments, "-M", str(tone), "-o", str(tmp_path / "enough.svg")])
     assert enough.exit_code == 0 and "point dots" not in enough.output
+    # More than fit without touching: the drawing leaves dots out (a colour run of 20000 left out 8044), and says so.
+    packing = int(np.floor(reachable_tone("point") * 400 / ((np.pi / 4 + 0.1) * 0.25)))
+    many = CliRunner().invoke(main, [*arguments, "-M", str(packing + 50), "-o", str(tmp_path / "many.svg")])
+    assert many.exit_code == 0 and f"more than the {packing} that fit" in many.output, many.output
+    assert "left out" in (tmp_path / "many.svg").read_text()
 
 
 def test_colour_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp_path):

@@ -195,6 +195,12 @@ def given_count_notes(darkness, n_points, draw):
                 f"{darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that carry its ink, "
                 f"about {int(round(tone_points))})"
             )
+        packing = int(np.floor(reachable_tone(style) * paper / area))
+        if n_points > packing:
+            lines.append(
+                f"{n_points} point dots of a {pen_width:g} mm pen are more than the {packing} that fit on this paper "
+                "without touching: the drawing leaves out those that would touch (give fewer, or -M auto)"
+            )
     return lines
 
 
