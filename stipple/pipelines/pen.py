@@ -6,9 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..io.units import UNITS
 from ..render.pen import pen_order, physical_centres
-from ..render.pen_count import PEN_STYLES, auto_count, pen_density
+from ..render.pen_count import PEN_STYLES, auto_count, paper_and_pen, pen_density
 
 ORDERS = ("path", "progressive")
 
@@ -31,8 +30,8 @@ def counted_recipe(recipe, weights):
     if recipe.problem.get("n_points") != "auto":
         return recipe, None
     draw = recipe.draw
-    millimetres = [value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"])]
-    count = auto_count(weights, millimetres[0], draw["dot_style"], millimetres[1])
+    paper, pen = paper_and_pen(draw)
+    count = auto_count(weights, paper, draw["dot_style"], pen)
     lines = [line for line in (count.reason(), count.note()) if line]
     recipe = replace(
         recipe,
@@ -49,7 +48,7 @@ def placement_density(weights, n_points, draw):
     filled dot's radius), in the run's drawing and in ``stipple render --like``."""
     if draw.get("dot_style") not in PEN_STYLES or draw.get("dot_radius") is not None or draw.get("style") != "plotter":
         return weights
-    paper, pen = (value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
+    paper, pen = paper_and_pen(draw)
     return pen_density(weights, n_points, paper, draw["dot_style"], pen)
 
 

@@ -103,6 +103,22 @@ def reachable_tone(style, pen_width=1.0):
     return area * 2 / (np.sqrt(3) * spacing**2) * NEIGHBOUR_RATIO**2
 
 
+def paper_area(paper_width, shape):
+    """The area (mm²) of paper ``paper_width`` mm wide with an image of ``shape = (H, W)``'s aspect."""
+    rows, columns = shape
+    return paper_width * paper_width * rows / columns
+
+
+def packing_count(style, pen_width, paper):
+    """``M_pack``: the most dots of ``style`` a pen ``pen_width`` mm wide draws on ``paper`` mm² without touching."""
+    return int(np.floor(reachable_tone(style, pen_width) * paper / pen_dot(style, pen_width)[0]))
+
+
+def paper_and_pen(draw):
+    """The drawing's width and pen width in mm from the render settings ``draw`` (``(value, unit)`` lengths)."""
+    return tuple(value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
+
+
 def auto_count(darkness, paper_width, style, pen_width):
     """The ``PenCount`` of a density ``darkness`` (H, W) in [0, 1] drawn ``paper_width`` mm wide.
 
@@ -112,13 +128,12 @@ def auto_count(darkness, paper_width, style, pen_width):
         For a disc style, an image without ink, or a count beyond ``MAX_POINTS``.
     """
     darkness = np.asarray(darkness, dtype=np.float64)
-    rows, columns = darkness.shape
     area, _ = pen_dot(style, pen_width)
-    paper = paper_width * paper_width * rows / columns
+    paper = paper_area(paper_width, darkness.shape)
     ink = float(darkness.mean()) * paper
     reachable = reachable_tone(style, pen_width)
     tone_points = int(round(ink / area))
-    packing_points = int(np.floor(reachable * paper / area))
+    packing_points = packing_count(style, pen_width, paper)
     # The ink the pen carries: tones beyond its reach drawn at it (placed by ``pen_density``, the same clip).
     count = min(int(round(float(np.minimum(darkness, reachable).mean()) * paper / area)), packing_points)
     if count < 1:
@@ -143,9 +158,8 @@ def pen_density(darkness, n_points, paper_width, style, pen_width):
     closer than a pen dot allows, which the drawing had to leave out (``stipple.render.dots.thin_apart``),
     irregularly: a dark photo's darkest tenth came out 0.35 dark, against the 0.56 that the packing reaches."""
     darkness = np.asarray(darkness, dtype=np.float64)
-    rows, columns = darkness.shape
     area, _ = pen_dot(style, pen_width)
-    allowed = reachable_tone(style) * paper_width * paper_width * rows / columns / (n_points * area)
+    allowed = reachable_tone(style) * paper_area(paper_width, darkness.shape) / (n_points * area)
     mean = darkness.mean()
     if mean <= 0 or darkness.max() <= allowed * mean:
         return darkness
@@ -184,9 +198,8 @@ def given_count_notes(darkness, n_points, draw):
             f"darkest 1 % is {darkest:.0%} dark; the default tone style with discs draws them)"
         )
     if style == "point":
-        paper_width, pen_width = (value * UNITS[unit] for value, unit in (draw["width"], draw["pen_width"]))
-        rows, columns = darkness.shape
-        paper = paper_width * paper_width * rows / columns
+        paper_width, pen_width = paper_and_pen(draw)
+        paper = paper_area(paper_width, darkness.shape)
         area, _ = pen_dot(style, pen_width)
         drawn, tone_points = n_points * area / paper, darkness.mean() * paper / area
         if n_points < LIGHT_SHARE * tone_points:
@@ -195,7 +208,7 @@ def given_count_notes(darkness, n_points, draw):
                 f"{darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that carry its ink, "
                 f"about {int(round(tone_points))})"
             )
-        packing = int(np.floor(reachable_tone(style) * paper / area))
+        packing = packing_count(style, pen_width, paper)
         if n_points > packing:
             lines.append(
                 f"{n_points} point dots of a {pen_width:g} mm pen are more than the {packing} that fit on this paper "
