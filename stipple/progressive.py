@@ -223,9 +223,8 @@ def progressive_colour(rgb, n_points, *, separation="gray", black=1.0, union_wei
     keys = ("backend", "threads", "epsilon", "hessian", "near_field", "levels")
     settings = {key: options.pop(key) for key in keys if key in options}
     layers = separate(rgb, separation, black)
-    if placement is not None:
-        layers = placed_layers(layers, placement)
     if len(layers) == 1:
+        layers = layers if placement is None else placed_layers(layers, placement)
         problem = progressive_problem(layers[0].density, n_points, **settings)
         return layers, run(problem, **options), [np.asarray(pass_counts(n_points, len(problem.slices)))]
     levels = settings.pop("levels", LEVELS)

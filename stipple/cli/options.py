@@ -405,8 +405,10 @@ def check_palette_extras(palette, black, union_weight=1.0):
     """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both),
     ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component), and
     ``--union-weight`` with one ink (gray, or one pen colour: the union is that ink)."""
-    inks = None if palette is None else str(palette).strip().lower()
-    one_ink = inks == "gray" or (inks is not None and inks not in ("cmyk", "cmy") and "," not in inks)
+    from ..colour import parse_palette
+
+    inks = None if palette is None else parse_palette(palette)
+    one_ink = inks == "gray" or (isinstance(inks, list) and len(inks) == 1)
     if one_ink and union_weight != 1.0:
         raise StippleError(f"--union-weight is for several inks, not --palette {palette}: it would be ignored")
     if palette is None:
