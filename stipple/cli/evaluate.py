@@ -104,8 +104,9 @@ def evaluate(
     if str(points_source).lower().endswith(".svg"):
         evaluate_plot(points_source, input_source, json_path, plotter)
         return
+    separation_given = palette != "cmyk" or black != 1.0
     if str(points_source).lower().endswith(".png"):
-        if palette != "cmyk" or black != 1.0:
+        if separation_given:
             raise click.ClickException(
                 "--palette and --black are for layered CSVs (points), not for a drawn PICTURE.png"
             )
@@ -127,7 +128,7 @@ def evaluate(
         reports.append(("report", "-"))  # the text report, or --json -, goes to stdout: it must be open
         with guarded_files([("points", points_source), ("input", input_source)], [], reports=reports):
             domain, points, names = read_points(points_source, labels=True)
-            if names is None and (palette != "cmyk" or black != 1.0):
+            if names is None and separation_given:
                 raise StippleError(f"{points_source}: --palette and --black are for layered CSVs (one ink here)")
             check_transfer_applies(points_source, domain, names, options)
             if len(points) < 2:

@@ -83,8 +83,13 @@ def render(
         formats = [output_format(path) for path in outputs]
         if like is not None and size is not None:
             raise StippleError("give --like or --size, not both (--like's image has its own size)")
-        transfer = {"gamma": gamma, "levels": parse_levels(levels), "value_range": value_range}
-        given = [f"--{name.replace('value_', '')}" for name, value in transfer.items() if value is not None]
+        run_transfer = [
+            ("--gamma", "gamma", gamma),
+            ("--levels", "levels", parse_levels(levels)),
+            ("--range", "value_range", value_range),
+        ]
+        given = [name for name, _, value in run_transfer if value is not None]
+        transfer = {key: value for name, key, value in run_transfer if name in given}
         if given and like is None:
             raise StippleError(
                 f"{', '.join(given)}: for the tone of --like's image; without --like they would be ignored"
@@ -115,11 +120,7 @@ def render(
                 )
                 write_outputs(outputs, files)
                 return
-            transfer = {
-                "invert": options["invert"],
-                **{key: value for key, value in transfer.items() if value is not None},
-            }
-            shape, darkness, wrapped = torus_canvas(points, like, size, transfer)
+            shape, darkness, wrapped = torus_canvas(points, like, size, {"invert": options["invert"], **transfer})
             if darkness is not None:  # the ink a pen's dots carry, as the run drew them
                 darkness = placement_density(darkness, len(points), settings)
             check_png_outputs(formats, shape[::-1], png_width, len(points))
