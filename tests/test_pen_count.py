@@ -316,3 +316,20 @@ def test_progressive_inks_are_placed_by_the_clipped_density(separation):
     assert union.max() <= 0.3 + 1e-12 < original.max()
     assert np.allclose(union[original <= 0.3], original[original <= 0.3])
     assert len(result.points) == 400
+
+
+def test_colour_pen_notes_speak_of_the_image_not_of_the_clipped_placement(tmp_path):
+    """The pen's clip lowers the density the dots are placed by; the notes on the image's darkest tones must still
+    give the image's own (a photo's darkest 1 %, 100 % dark, was reported as 71 %)."""
+    from stipple.colour import separate, union_darkness
+
+    image = tmp_path / "ramp.png"
+    ramp = np.linspace(250, 5, 72).astype(np.uint8)
+    Image.fromarray(np.dstack([np.tile(ramp, (48, 1))] * 3)).save(image)
+    paper = 45.0 * 45.0 * 48 / 72
+    packing = int(np.floor(reachable_tone("point") * paper / pen_dot("point", 0.5)[0]))
+    options = ["-M", str(int(0.9 * packing)), "--dot-style", "point", "--pen-width", "0.5mm", "--width", "45mm"]
+    result = CliRunner().invoke(main, ["colour", str(image), "--palette", "gray", *options, "--iterations", "2"])
+    rgb = np.asarray(Image.open(image).convert("RGB"), dtype=float) / 255
+    darkest = np.percentile(union_darkness(separate(rgb, "gray")), 99)
+    assert result.exit_code == 0 and f"the image's darkest 1 % is {darkest:.0%} dark" in result.output, result.output

@@ -2,11 +2,10 @@
 separation -> joint problem -> solve -> each ink's dots, ordered per pen -> layered drawing -> outputs."""
 
 from dataclasses import dataclass, field
-from functools import partial
 
 import numpy as np
 
-from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate, union_darkness
+from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_canvas, default_png_width
@@ -69,7 +68,7 @@ def tone_settings(densities, rgb, separation):
 def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announce=None):
     """Separate ``image`` (a path) into inks, optimise their dots jointly and draw them in every format of
     ``formats``; ``session`` and ``announce`` as for ``stipple.pipelines.image.stipple_image``, ``inspect``
-    is shown the inks' darkness together (H, W) once they are separated.
+    is shown the inks' darkness together (H, W) once they are separated (before a pen's clip).
 
     Returns
     -------
@@ -83,10 +82,14 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
     if ".png" in formats:
         canvas = rgb.shape[1::-1]
         check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
-    placement = partial(placement_density, n_points=n_points, draw=recipe.draw)
+
+    def placement(union):
+        # The inks' darkness together as separated, before a pen's clip: what the notes on the image speak of.
+        if inspect is not None:
+            inspect(np.clip(union, 0.0, 1.0))
+        return placement_density(union, n_points, recipe.draw)
+
     layers, problem = colour_problem(rgb, n_points, settings.pop("bandwidth"), placement=placement, **settings)
-    if inspect is not None:
-        inspect(union_darkness(layers))
     if announce is not None:
         announce(problem)
     result = run(problem, **{**recipe.solve, **(session or {})})
