@@ -8,12 +8,10 @@ import sys
 import numpy as np
 
 from ..errors import StippleError
-from .sources import read_source
+from .sources import STDIN_NAME, read_source
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
-# How messages name standard input.
-STDIN_NAME = "<stdin>"
 
 
 def csv_bytes(columns, names, number_format=".6f"):

@@ -8,6 +8,8 @@ import sys
 from ..errors import StippleError
 
 MAX_INPUT_BYTES = 1 << 30
+# How messages name standard input.
+STDIN_NAME = "<stdin>"
 # The last standard input read and its bytes: a command may read its input twice (a colour run's inks, then its
 # picture's target colour), and a pipe can be read once.
 _STDIN = [None, b""]
@@ -19,7 +21,7 @@ def stdin_stream():
     if _STDIN[0] is not stream:
         _STDIN[:] = [stream, read_source(stream)]
     copy = io.BytesIO(_STDIN[1])
-    copy.name = "<stdin>"
+    copy.name = STDIN_NAME
     return copy
 
 
