@@ -87,13 +87,12 @@ def test_sphere_measures_on_a_design():
 
 def test_cap_discrepancy_known_cases(rng):
     cells = CellMap(np.ones((90, 180)))
-    centres, masses = cells.centres_and_masses()
     north = fibonacci_lattice(2000)
     north[:, 2] = np.abs(north[:, 2])
-    assert cap_discrepancy(north, centres, masses) == pytest.approx(0.5, abs=0.02)
+    assert cap_discrepancy(north, cells) == pytest.approx(0.5, abs=0.02)
     spread, random = fibonacci_lattice(2000), rng.standard_normal((2000, 3))
     random /= np.linalg.norm(random, axis=1, keepdims=True)
-    assert cap_discrepancy(spread, centres, masses) < 0.5 * cap_discrepancy(random, centres, masses)
+    assert cap_discrepancy(spread, cells) < 0.5 * cap_discrepancy(random, cells)
     assert minimum_separation(spread) > 3 * minimum_separation(random)
 
 

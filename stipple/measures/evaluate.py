@@ -10,7 +10,8 @@ All formulas are documented in the README ("Evaluating point sets"); in short:
   ``P(f) = |sum_i exp(-2 pi i n.x_i)|^2 / M`` over annuli ``|n| in [f, f+1)`` and its anisotropy
   ``10 log10(var / mean^2)`` in dB.
 * Sphere: the minimum geodesic separation, and a spherical-cap discrepancy estimate
-  ``max |#(points in cap)/M - w(cap)/m|`` over caps with 500 Fibonacci centres and 90 radii.
+  ``max |#(points in cap)/M - w(cap)/m|`` over caps with 500 Fibonacci centres and 90 radii, the map's mass
+  in each cap integrated over the cells the cap cuts (``stipple.sphere_caps``).
 * Both (clumps): each dot's nearest-neighbour distance (pixels on the torus, geodesic radians on the sphere)
   over the spacing of a hexagonal packing of the local density, ``d_hex = sqrt(2 / (sqrt(3) rho))`` with
   ``rho = M w(x) / int w`` per pixel or steradian; min, 1st and 5th percentile and median over the dots
@@ -24,6 +25,7 @@ from scipy.spatial import cKDTree
 from ..design import fibonacci_lattice
 from ..halftone import hexagonal_spacing
 from ..sampling import pixel_indices, pixel_positions
+from ..sphere_caps import CapMasses
 from ..sphere_density import density_at, local_density
 from ..torus import periodic_blur
 
@@ -262,21 +264,21 @@ def minimum_separation(points):
     return float(2 * np.arcsin(min(chord / 2, 1.0)))
 
 
-def cap_discrepancy(points, cell_centres, cell_masses, centres=500, radii=90):
-    """``max |fraction of points in cap - fraction of mass in cap|`` over a grid of caps."""
+def cap_discrepancy(points, cells, centres=500, radii=90):
+    """``max |fraction of points in cap - fraction of mass in cap|`` over a grid of caps.
+
+    The map's mass in each cap is integrated over the cells the cap's edge cuts
+    (``stipple.sphere_caps.CapMasses``), not put at the cells' centres.
+    """
     directions = fibonacci_lattice(centres)
     heights = np.cos(np.linspace(0, np.pi, radii + 2)[1:-1])
+    mass_above = CapMasses(cells)
     worst = 0.0
-    mass_fraction = cell_masses / cell_masses.sum()
     for direction in directions:
         point_heights = np.sort(points @ direction)
-        order = np.argsort(cell_centres @ direction)
-        cell_heights = (cell_centres @ direction)[order]
-        cumulative_mass = np.concatenate([[0.0], np.cumsum(mass_fraction[order])])
         # Cap {x : x . direction >= h}: everything above height h.
         points_above = 1 - np.searchsorted(point_heights, heights, side="left") / len(points)
-        mass_above = 1 - cumulative_mass[np.searchsorted(cell_heights, heights, side="left")]
-        worst = max(worst, float(np.abs(points_above - mass_above).max()))
+        worst = max(worst, float(np.abs(points_above - mass_above(direction, heights)).max()))
     return worst
 
 
@@ -318,7 +320,7 @@ def evaluate_sphere(problem, points, density):
         "untruncated_energy": untruncated_energy(problem, points),
         "max_coefficient_error": coefficient_error,
         "minimum_separation_degrees": float(np.degrees(minimum_separation(points))),
-        "cap_discrepancy": cap_discrepancy(points, *cells.centres_and_masses()),
+        "cap_discrepancy": cap_discrepancy(points, cells),
         **sphere_clumps(points, density),
     }
 
