@@ -106,7 +106,9 @@ def video(ctx, source, **options):
             if options["palette"] is not None:
                 draw = colour_drawing(frames.shape, settings, parse_palette(options["palette"]))
             with VideoOutputs(plan, frames.shape, draw, fps, layered=options["palette"] is not None) as outputs:
-                result, stopped_by = run_frames(frames, video_settings(options, frames.shape), outputs, options)
+                result, stopped_by = run_frames(
+                    frames, video_settings(options, frames.shape), outputs, options, settings
+                )
                 if result.frames:
                     outputs.commit()
     except StippleError as error:
@@ -188,9 +190,10 @@ class FrameProgress(Progress):
         return False
 
 
-def run_frames(frames, settings, outputs, options):
+def run_frames(frames, settings, outputs, options, draw):
     """Every frame under the progress bar and signal handling: a first SIGINT / SIGTERM ends the frame under way
-    (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal."""
+    (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal. ``draw``:
+    the drawing's settings (pen dots are placed by the darkness clipped at the pen's reach)."""
     from ..video import stipple_video
 
     seconds, count = parse_every(options["checkpoint_every"])
@@ -218,7 +221,11 @@ def run_frames(frames, settings, outputs, options):
     pictures = (
         frames.colours()
         if colour
-        else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
+        else placed_frames(
+            frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels),
+            settings.n_points,
+            draw,
+        )
     )
     with SIGNALS.deferred() as interruption:
         try:
@@ -236,6 +243,15 @@ def run_frames(frames, settings, outputs, options):
         finally:
             progress.close()
     return result, interruption.signal
+
+
+def placed_frames(pictures, n_points, draw):
+    """``(index, w)`` of each frame as its dots are placed and drawn: for pen dots in the plotter style, the
+    darkness clipped at the pen's reach (``placement_density``), as ``stipple torus`` places a still's."""
+    from ..pipelines.pen import placement_density
+
+    for index, weights in pictures:
+        yield index, placement_density(weights, n_points, draw)
 
 
 def finish(result, stopped_by, options, started):
