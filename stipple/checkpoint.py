@@ -188,7 +188,9 @@ def _check_matches(path, metadata, problem):
     saved = metadata["settings"]
     differ = [key for key, value in problem.settings.items() if saved.get(key) != value]
     if differ:
-        what = "the image or -M" if {"points", "shape"} & set(differ) else SETTING_NAMES.get(differ[0], differ[0])
+        what = SETTING_NAMES.get(differ[0], differ[0])
+        if {"points", "shape"} & set(differ):
+            what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
         details = "; ".join(f"{key} was {_short(saved.get(key))}, now {problem.settings[key]!r}" for key in differ[:2])
         raise StippleError(
             f"{path}: checkpoint is for a different run: {what} differs ({details}); "

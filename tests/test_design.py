@@ -150,6 +150,9 @@ def test_cli_writes_a_full_precision_design_and_resumes(tmp_path):
     for _ in range(2):  # a finished design resumed: the same file, no step beyond the target
         again = CliRunner().invoke(main, base + ["--resume"])
         assert again.exit_code == 0 and out.read_bytes() == finished, again.output
+    other = CliRunner().invoke(main, [*base[:2], "12", *base[3:], "--resume"])
+    assert other.exit_code == 1 and "the map, -M or a design's -t differs" in other.output
+    assert out.read_bytes() == finished
 
 
 def test_cli_exit_code_says_when_the_points_are_not_a_design(tmp_path):
