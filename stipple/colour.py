@@ -182,12 +182,17 @@ def placed_layers(layers, placement):
     """``layers`` with every ink's density scaled where ``placement`` (a function of the inks' density together,
     their sum) lowers it: all the inks' dots are placed as one stipple of that density, each ink keeping its
     share at every pixel (a pen's dots clipped at its reach, ``stipple.pipelines.pen.placement_density``)."""
-    union = sum(layer.density for layer in layers)
+    scale = placement_scale(sum(layer.density for layer in layers), placement)
+    return layers if scale is None else [replace(layer, density=layer.density * scale) for layer in layers]
+
+
+def placement_scale(union, placement):
+    """``placement(union) / union`` per pixel (1 where the union is empty), or None where ``placement`` leaves
+    the union as it is: the factor that scales every ink's density by the same share (``placed_layers``)."""
     placed = placement(union)
     if placed is union:
-        return layers
-    scale = np.divide(placed, union, out=np.ones_like(union), where=union > 0)
-    return [replace(layer, density=layer.density * scale) for layer in layers]
+        return None
+    return np.divide(placed, union, out=np.ones_like(union), where=union > 0)
 
 
 def colour_problem(

@@ -80,6 +80,9 @@ class VideoSettings:
     other frame's warm-started run, which moves the dots within ``free_margin`` spacings of a change in darkness
     above ``change`` (``free_dots``). ``correct``: the low-frequency correction, of frame 0 and of every warm frame
     whose darkness changed. ``tol``, ``settle``, ``time_limit``, ``safeguard`` and ``beta`` apply to every frame.
+    ``placement``: the density the dots are placed by as a function of the frame's (a colour frame's: of its
+    inks' together, each ink keeping its share), e.g. clipped at a pen's reach
+    (``stipple.pipelines.pen.placement_density``); None: the frame's own.
     """
 
     n_points: int
@@ -104,6 +107,7 @@ class VideoSettings:
     palette: object = None
     black: float = 1.0
     union_weight: float = 1.0
+    placement: object = None
 
 
 @dataclass
@@ -192,7 +196,7 @@ def stipple_video(
     previous, before = (None, None) if key is None else key
     inks = None if settings.palette is None else Inks(settings, None if key is None else key[1])
     for position, (index, picture) in enumerate(frames):
-        weights = picture if inks is None else inks.densities(picture)
+        weights = inks.densities(picture) if inks is not None else _placed(picture, settings.placement)
         if not np.any(np.asarray(weights) > 0):
             raise StippleError(
                 f"frame {index} is blank (all white): there is nothing to place dots on; leave it out "
@@ -394,6 +398,10 @@ def _run_options(settings, stop):
         "settle": settings.settle,
         "callback": stop,
     }
+
+
+def _placed(weights, placement):
+    return weights if placement is None else placement(weights)
 
 
 def _defining(settings, identity):

@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .colour import separate
+from .colour import placement_scale, separate
 from .multiclass import class_counts, class_slices, multiclass_problem
 
 # An ink with dots but no ink in a frame gets this even density: its dots spread out (and are drawn with no area).
@@ -35,6 +35,9 @@ class Inks:
             self._fix([(layer.name, layer.colour) for layer in found.values()], found)
         zeros = np.zeros(rgb.shape[:2])
         stack = np.stack([found[name].density if name in found else zeros for name in self.names])
+        if self.settings.placement is not None:
+            scale = placement_scale(stack.sum(axis=0), self.settings.placement)
+            stack = stack if scale is None else stack * scale
         empty = stack.reshape(len(stack), -1).max(axis=1) <= 0
         stack[empty] = EMPTY_INK
         return stack

@@ -442,3 +442,34 @@ def test_pen_dot_frames_are_placed_by_the_darkness_clipped_at_the_pen_reach(tmp_
     for k in range(2):
         left_out = re.findall(r"(\d+) dots left out", (tmp_path / f"f/{k}.svg").read_text())
         assert sum(int(count) for count in left_out[:1]) <= 25
+
+
+@pytest.mark.parametrize("palette", [None, "cmy"])
+def test_frames_are_placed_by_the_settings_placement_each_ink_keeping_its_share(palette):
+    """``VideoSettings.placement`` (a pen's clip) acts on every frame's darkness, on a colour frame's inks
+    together: each ink keeps its share of the placed darkness at every pixel."""
+    from stipple.colour import separate
+
+    clip = colour_disc(frames=2)
+    pictures = clip if palette else [1 - rgb @ np.array([0.299, 0.587, 0.114]) for rgb in clip]
+    settings = VideoSettings(
+        n_points=300,
+        bandwidth=24,
+        threads=1,
+        palette=palette,
+        iterations=5,
+        frame_iterations=2,
+        placement=lambda w: np.minimum(w, 0.4),
+    )
+    frames = []
+    stipple_video(enumerate(pictures), settings, on_frame=frames.append)
+    for picture, frame in zip(pictures, frames, strict=True):
+        if palette is None:
+            assert np.array_equal(frame.density, np.minimum(picture, 0.4))
+            continue
+        inks = np.stack([layer.density for layer in separate(picture, palette)])
+        union = inks.sum(axis=0)
+        assert frame.density.sum(axis=0) == pytest.approx(np.minimum(union, 0.4), abs=1e-12)
+        share = np.divide(inks, union, out=np.zeros_like(inks), where=union > 0)
+        placed = np.divide(frame.density, frame.density.sum(axis=0), out=np.zeros_like(inks), where=union > 0)
+        assert placed == pytest.approx(share, abs=1e-12)

@@ -107,7 +107,7 @@ def video(ctx, source, **options):
                 draw = colour_drawing(frames.shape, settings, parse_palette(options["palette"]))
             with VideoOutputs(plan, frames.shape, draw, fps, layered=options["palette"] is not None) as outputs:
                 result, stopped_by = run_frames(
-                    frames, video_settings(options, frames.shape), outputs, options, settings
+                    frames, video_settings(options, frames.shape, settings), outputs, options
                 )
                 if result.frames:
                     outputs.commit()
@@ -132,13 +132,17 @@ def colour_drawing(shape, settings, separation):
     return draw
 
 
-def video_settings(options, shape):
-    """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``)."""
+def video_settings(options, shape, draw):
+    """The library's settings from the command's options (``--init`` CSVs read for frame 0's ``shape``; ``draw``,
+    the drawing's settings: pen dots are placed by the darkness clipped at the pen's reach)."""
+    from functools import partial
+
     import numpy as np
 
     from ..colour import parse_palette
     from ..halftone import check_integer
     from ..pipelines.inputs import read_torus_init
+    from ..pipelines.pen import placement_density
     from ..video import VideoSettings
 
     check_integer("seed", options["seed"], 0, 2**63 - 1)
@@ -167,6 +171,7 @@ def video_settings(options, shape):
         palette=palette,
         black=options["black"],
         union_weight=options["union_weight"],
+        placement=partial(placement_density, n_points=options["n_points"], draw=draw),
     )
 
 
@@ -190,10 +195,9 @@ class FrameProgress(Progress):
         return False
 
 
-def run_frames(frames, settings, outputs, options, draw):
+def run_frames(frames, settings, outputs, options):
     """Every frame under the progress bar and signal handling: a first SIGINT / SIGTERM ends the frame under way
-    (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal. ``draw``:
-    the drawing's settings (pen dots are placed by the darkness clipped at the pen's reach)."""
+    (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal."""
     from ..video import stipple_video
 
     seconds, count = parse_every(options["checkpoint_every"])
@@ -221,11 +225,7 @@ def run_frames(frames, settings, outputs, options, draw):
     pictures = (
         frames.colours()
         if colour
-        else placed_frames(
-            frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels),
-            settings.n_points,
-            draw,
-        )
+        else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
     )
     with SIGNALS.deferred() as interruption:
         try:
@@ -243,15 +243,6 @@ def run_frames(frames, settings, outputs, options, draw):
         finally:
             progress.close()
     return result, interruption.signal
-
-
-def placed_frames(pictures, n_points, draw):
-    """``(index, w)`` of each frame as its dots are placed and drawn: for pen dots in the plotter style, the
-    darkness clipped at the pen's reach (``placement_density``), as ``stipple torus`` places a still's."""
-    from ..pipelines.pen import placement_density
-
-    for index, weights in pictures:
-        yield index, placement_density(weights, n_points, draw)
 
 
 def finish(result, stopped_by, options, started):
