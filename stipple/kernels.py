@@ -109,6 +109,16 @@ def _design_strength(kernel, parameter):
 # Near-field split: K = K_R + K_near with K_near supported in a small ball and K_R smooth enough for the transforms.
 
 
+def _horner(x, coeffs):
+    """``c0 + x (c1 + x (c2 + ...))`` in place on one array: the same products and sums, in the same order."""
+    value = x * coeffs[-1]
+    for coefficient in coeffs[-2:0:-1]:
+        value += coefficient
+        value *= x
+    value += coeffs[0]
+    return value
+
+
 def ball_profile(distance, orders=5):
     """The ball-discrepancy kernel in space and its first four derivatives, as functions of the distance ``d``.
 
@@ -180,13 +190,16 @@ class NearKernel:
         q, q1, q2 = self._polynomial(r)
         return g - q, g1 - q1, g2 - q2
 
-    def pair_terms(self, distance):
+    def pair_terms(self, distance, square=None):
         """``(sum of K, K'/r, K'')`` at distances ``0 < r < radius``: what the pair sums need (the polynomial's
-        ``q'/r`` without a division)."""
+        ``q'/r`` without a division). ``square``: ``distance * distance`` if the caller has it."""
         g, g1, g2 = self.profile(distance, orders=3)
-        q, q1_over_r, q2 = self._polynomial_in_square(distance * distance)
-        # K is a small difference of g and q (both near g(0)): summed after subtracting, not before.
-        return float(np.sum(g - q)), g1 / distance - q1_over_r, g2 - q2
+        q, q1_over_r, q2 = self._polynomial_in_square(distance * distance if square is None else square)
+        # K is a small difference of g and q (both near g(0)): summed after subtracting, not before. The
+        # polynomial's arrays are this call's own, so the differences are taken in place.
+        value_sum = float(np.sum(np.subtract(g, q, out=q)))
+        force = np.subtract(np.divide(g1, distance), q1_over_r, out=q1_over_r)
+        return value_sum, force, np.subtract(g2, q2, out=q2)
 
     def _polynomial(self, r):
         """``(q, q', q'')`` at distances ``r``."""
@@ -196,9 +209,9 @@ class NearKernel:
     def _polynomial_in_square(self, square):
         """``(q, q'/r, q'')`` of the even polynomial, from ``r²``."""
         a = self.coeffs
-        value = a[0] + square * (a[1] + square * (a[2] + square * (a[3] + square * a[4])))
-        first_over_r = 2 * a[1] + square * (4 * a[2] + square * (6 * a[3] + square * (8 * a[4])))
-        second = 2 * a[1] + square * (12 * a[2] + square * (30 * a[3] + square * (56 * a[4])))
+        value = _horner(square, a)
+        first_over_r = _horner(square, (2 * a[1], 4 * a[2], 6 * a[3], 8 * a[4]))
+        second = _horner(square, (2 * a[1], 12 * a[2], 30 * a[3], 56 * a[4]))
         return value, first_over_r, second
 
     def plane_coefficients(self, frequencies):

@@ -159,22 +159,24 @@ class NearField:
 
     def _pair_block(self, columns, first, second):
         """The candidate pairs ``(first, second)`` of one block that lie closer than the radius."""
-        delta = [self.geometry.wrap(column[first] - column[second], axis) for axis, column in enumerate(columns)]
-        square = sum(component * component for component in delta)
+        delta = [self.geometry.wrap(_difference(column, first, second), axis) for axis, column in enumerate(columns)]
+        square = _sum_of_squares(delta)
         inside = np.flatnonzero(square < self.kernel.radius**2)
         distance = np.maximum(np.sqrt(square[inside]), 1e-9 * self.kernel.radius)
-        value_sum, force, curvature = self.kernel.pair_terms(distance)
+        distance_square = distance * distance
+        value_sum, force, curvature = self.kernel.pair_terms(distance, distance_square)
         radial, tangential = curvature, force
         if self.hessian == "gauss-newton":
-            radial, tangential = np.abs(radial), np.abs(tangential)
+            radial, tangential = np.abs(radial, out=radial), np.abs(tangential)
+        excess = np.subtract(radial, tangential, out=radial)
         return _PairBlock(
-            first=first[inside],
-            second=second[inside],
+            first=first.take(inside),
+            second=second.take(inside),
             value_sum=value_sum,
             force=force,
             tangential=tangential,
-            excess=(radial - tangential) / (distance * distance),
-            delta=[component[inside] for component in delta],
+            excess=np.divide(excess, distance_square, out=excess),
+            delta=[component.take(inside) for component in delta],
         )
 
     def _update_candidates(self, positions):
@@ -322,6 +324,21 @@ class NearField:
     def _weingarten_vector(self, vector):
         weights = self._curvature_weights()
         return 0.0 if weights is None else weights[:, None] * vector
+
+
+def _difference(column, first, second):
+    """``column[first] - column[second]`` with one temporary array fewer (the same values)."""
+    difference = column.take(first)
+    return np.subtract(difference, column.take(second), out=difference)
+
+
+def _sum_of_squares(components):
+    """``sum(c * c for c in components)``, in place: the same additions in the same order."""
+    total = components[0] * components[0]
+    square = np.empty_like(total)
+    for component in components[1:]:
+        total += np.multiply(component, component, out=square)
+    return total
 
 
 def _concatenate(blocks):
