@@ -165,3 +165,12 @@ def test_the_progress_bar_counts_each_phase_without_the_cap_as_its_total(monkeyp
     progress.close()
     shown = [line for line in stream.getvalue().replace("\r", "\n").splitlines() if "it" in line]
     assert "2000" not in stream.getvalue() and shown[-1].lstrip().startswith("4it"), shown[-3:]
+
+
+@pytest.mark.parametrize("command", ["torus", "colour", "line"])
+def test_flat_commands_refuse_geojson_before_any_work(image_path, command):
+    """The formats are checked with the other outputs, before the run (a held-out sweep waited 10 s for
+    'GeoJSON output is for sphere points'), and the formats offered are the command's own."""
+    result = run([command, image_path, "-M", 40, "-q", "-o", "dots.geojson"])
+    assert result.exit_code == 1, result.output
+    assert "dots.geojson: GeoJSON output is for sphere points; use one of .csv, .svg, .png" in result.output

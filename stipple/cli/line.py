@@ -36,7 +36,7 @@ OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
 def line(ctx, image, **options):
     """Draw IMAGE as one closed line (-M vertices) whose length measure minimises the discrepancy."""
     from ..halftone import check_count
-    from ..io.commit import output_format
+    from ..io.commit import FLAT_FORMATS, output_format
     from ..io.images import load_input
     from ..io.units import BLACK, WHITE, parse_length
     from ..line import line_points
@@ -51,7 +51,7 @@ def line(ctx, image, **options):
         width = parse_length(options["width"])
         pen_width = None if options["pen_width"] is None else parse_length(options["pen_width"], "pen-width")
         inputs = [("image", image)] + ([] if options["init"] is None else [("--init file", options["init"])])
-        with guarded_files(inputs, options["outputs"], options["checkpoint"]):
+        with guarded_files(inputs, options["outputs"], options["checkpoint"], formats=FLAT_FORMATS):
             weights = load_input(
                 image, invert=options["invert"], gamma=options["gamma"], value_range=options["value_range"]
             )

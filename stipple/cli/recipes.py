@@ -4,7 +4,7 @@ and the pipeline run under supervision (files guarded, progress, signals, summar
 import click
 
 from ..errors import StippleError
-from ..io.commit import output_format
+from ..io.commit import FLAT_FORMATS, output_format
 from .defaults import INITS
 from .options import parse_levels, render_settings
 from .supervise import announcer, finish, guarded_files, report_run, run_keywords, supervised, write_outputs
@@ -98,7 +98,7 @@ def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers)
     """``pipeline(image, formats, recipe, session=..., **observers)`` with the files guarded, the run supervised
     (its progress, checkpoint and signal keywords are the ``session``), the settings announced (``--verbose``),
     the pen-up travel reported, the outputs committed and the summary printed."""
-    with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
+    with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"], formats=FLAT_FORMATS):
         formats = [output_format(path) for path in options["outputs"]]
         observers["announce"] = announcer(options)
 

@@ -12,7 +12,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.commit import check_writable, commit_outputs, output_format
+from ..io.commit import FORMATS, check_writable, commit_outputs, output_format
 from ..io.safety import CheckpointLock, check_distinct
 
 
@@ -124,15 +124,15 @@ def parse_every(text):
 
 
 @contextlib.contextmanager
-def guarded_files(inputs, outputs, checkpoint=None, reports=()):
+def guarded_files(inputs, outputs, checkpoint=None, reports=(), formats=FORMATS):
     """Check every file of a run before any work, then hold the checkpoint's lock for the whole run.
 
     ``inputs`` and ``reports`` are ``(role, path)`` pairs (files read; extra files written). Outputs'
-    formats and directories are checked, no output may name an input, the checkpoint or another
-    output, and ``-`` (stdout) may be given once.
+    formats (one of ``formats``) and directories are checked, no output may name an input, the checkpoint
+    or another output, and ``-`` (stdout) may be given once.
     """
     for path in outputs:
-        output_format(path)
+        output_format(path, formats)
         check_writable(path)
     for _, path in reports:
         check_writable(path)

@@ -10,15 +10,19 @@ import tempfile
 from ..errors import StippleError
 
 FORMATS = (".csv", ".svg", ".png", ".geojson", ".json")
+# The formats of points on a flat image (the torus, colour and the line): GeoJSON is for sphere points.
+FLAT_FORMATS = (".csv", ".svg", ".png")
 
 
-def output_format(path):
-    """The format of ``path`` by its extension (``-`` is CSV on stdout)."""
+def output_format(path, allowed=FORMATS):
+    """The format of ``path`` by its extension (``-`` is CSV on stdout), one of ``allowed``."""
     if str(path) == "-":
         return ".csv"
     extension = os.path.splitext(str(path))[1].lower()
-    if extension not in FORMATS:
-        raise StippleError(f"{path}: unknown output format {extension or '(none)'}; use one of {', '.join(FORMATS)}")
+    if extension not in allowed:
+        what = "GeoJSON output is for sphere points" if extension in FORMATS else "unknown output format"
+        found = "" if extension in FORMATS else f" {extension or '(none)'}"
+        raise StippleError(f"{path}: {what}{found}; use one of {', '.join(allowed)}")
     return extension
 
 
