@@ -55,6 +55,20 @@ def test_a_tone_shift_is_measured_as_that_shift_in_every_tenth():
     assert sum(b.pixels for b in measures.tone_curve) == ramp().size
 
 
+def test_the_worst_tenth_is_a_tone_not_one_pixel():
+    """A flat gray with one dark pixel drawn white: its own tenth (a pixel or two after the blur) is all error,
+    but the worst tenth speaks of the tones that hold pixels, as the tone curve lists them."""
+    reference = np.full((120, 160), 0.6)
+    reference[60, 80] = 0.0
+    drawn = reference.copy()
+    drawn[60, 80] = 0.6
+    (measures,) = measure_picture(reference, drawn, sigmas=(0.5,))
+    assert max(abs(b.output - b.input) for b in measures.tone_curve) > 0.1
+    assert measures.worst_tenth < 0.01
+    (shifted,) = measure_picture(reference, drawn + 0.05, sigmas=(0.5,))
+    assert shifted.worst_tenth == pytest.approx(0.05, abs=0.01)
+
+
 def test_ciede2000_of_two_grays_is_their_lightness_difference_over_sl():
     """For neutral colours CIEDE2000 reduces to dL / S_L, S_L = 1 + 0.015 (L - 50)^2 / sqrt(20 + (L - 50)^2)."""
     a, b = 0.5, 0.6

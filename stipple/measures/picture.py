@@ -22,6 +22,9 @@ TENTHS = 10
 # The eight corners of the RGB cube: the inks (and white paper) of the colour Floyd-Steinberg baseline.
 CUBE = [(r, g, b) for r in (0, 255) for g in (0, 255) for b in (0, 255)]
 FS_UPSCALE = 4
+# The worst tenth is taken over tenths holding at least this share of the pixels: a tenth of a few pixels (a
+# blurred cut frame's darkest 1 pixel of 19200) measured one pixel's noise, not a tone.
+WORST_TENTH_SHARE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -38,7 +41,7 @@ class ToneBin:
 @dataclass(frozen=True)
 class GrayMeasures:
     """Luminance measures at one blur ``sigma`` (input pixels); ``worst_tenth`` is the largest |output - input|
-    over the tone curve's tenths."""
+    over the tone curve's tenths that hold at least ``WORST_TENTH_SHARE`` of the pixels."""
 
     sigma: float
     rmse: float
@@ -130,9 +133,16 @@ def gray_measures(reference, picture, sigma):
         sigma=float(sigma),
         rmse=float(np.sqrt(np.mean((a - b) ** 2))),
         mean_difference=float(np.mean(b - a)),
-        worst_tenth=float(max(abs(row.output - row.input) for row in curve)),
+        worst_tenth=_worst_tenth(curve, a.size),
         tone_curve=curve,
     )
+
+
+def _worst_tenth(curve, pixels):
+    """The largest |output - input| of the tenths holding ``WORST_TENTH_SHARE`` of the ``pixels`` (all of them when
+    none does)."""
+    counted = [row for row in curve if row.pixels >= WORST_TENTH_SHARE * pixels] or curve
+    return float(max(abs(row.output - row.input) for row in counted))
 
 
 def colour_measures(reference, picture, sigma):
