@@ -174,3 +174,18 @@ def test_flat_commands_refuse_geojson_before_any_work(image_path, command):
     result = run([command, image_path, "-M", 40, "-q", "-o", "dots.geojson"])
     assert result.exit_code == 1, result.output
     assert "dots.geojson: GeoJSON output is for sphere points; use one of .csv, .svg, .png" in result.output
+
+
+@pytest.mark.parametrize("light, hinted", [(40, True), (0, False)])
+def test_the_dark_image_note_offers_invert_only_where_it_has_light_parts(tmp_path, light, hinted):
+    """An image black all over is blank under --invert: the note did offer it (a held-out sweep followed it)."""
+    pixels = np.zeros((16, 24), np.uint8)
+    pixels[:4, :4] = light
+    Image.fromarray(pixels).save(tmp_path / "dark.png")
+    result = run(["torus", tmp_path / "dark.png", "-M", 40, "-N", 8, "--iterations", 1, "-o", tmp_path / "d.csv"])
+    assert result.exit_code == 0, result.output
+    assert "dark on average" in result.output
+    assert ("--invert" in result.output) == hinted
+    if hinted:
+        inverted = run(["torus", tmp_path / "dark.png", "-M", 40, "-N", 8, "--iterations", 1, "--invert", "-q"])
+        assert inverted.exit_code == 0, inverted.output

@@ -171,7 +171,7 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
             default=1e-4,
             show_default=True,
             help="Stop when the gradient norm falls to this fraction of the initial one (for the torus's stratified "
-            "start: of the one at i.i.d. density samples).",
+            "start: of the one at i.i.d. density samples; spherical designs, sphere --uniform: 1e-6 unless given).",
         ),
         click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option(

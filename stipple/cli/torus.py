@@ -113,8 +113,12 @@ def tone_hints(weights, options):
             err=True,
         )
     if weights.mean() > DARK_MEAN:
+        # An image black all over has no light parts for --invert (it is blank under it).
+        hint = (
+            "--invert draws its light parts as white dots on black: docs/picture.md"
+            if weights.min() < 1
+            else "it is black all over"
+        )
         click.echo(
-            f"stipple: note: the image is {weights.mean():.0%} dark on average; drawn dark as it is (--invert draws "
-            "its light parts as white dots on black: docs/picture.md)",
-            err=True,
+            f"stipple: note: the image is {weights.mean():.0%} dark on average; drawn dark as it is ({hint})", err=True
         )
