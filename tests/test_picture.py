@@ -8,7 +8,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from stipple.cli import main
-from stipple.measures.picture import floyd_steinberg, measure_picture, on_grid
+from stipple.measures.picture import area_average, floyd_steinberg, measure_picture, on_grid
 
 pytest.importorskip("skimage")
 
@@ -105,6 +105,17 @@ def test_floyd_steinberg_has_about_the_dots_asked_for_and_the_tone():
     assert measure_picture(reference, picture, sigmas=(4.0,))[0].rmse < 0.03
     colour, inked = floyd_steinberg(colours(60, 90), 1500)
     assert colour.shape == (60, 90, 3) and abs(inked - 1500) < 0.05 * 1500
+
+
+def test_area_average_is_exact_at_any_ratio(rng):
+    """Floyd-Steinberg's dots come back onto the input's grid by exact areas (a nearest-neighbour 4x enlargement
+    moved their edges by up to an eighth of a pixel): whole multiples, a split pixel by hand, the mean kept."""
+    pixels = rng.random((7, 5))
+    assert area_average(pixels, (14, 10)) == pytest.approx(np.repeat(np.repeat(pixels, 2, 0), 2, 1))
+    assert area_average(np.repeat(np.repeat(pixels, 3, 0), 3, 1), (7, 5)) == pytest.approx(pixels)
+    assert area_average(np.array([[0.0, 1.0]]), (1, 3)) == pytest.approx(np.array([[0.0, 0.5, 1.0]]))
+    odd = rng.random((13, 17, 3))
+    assert area_average(odd, (5, 4)).mean(axis=(0, 1)) == pytest.approx(odd.mean(axis=(0, 1)))
 
 
 def test_bad_arguments_name_the_parameter():

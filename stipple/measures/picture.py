@@ -21,7 +21,6 @@ SIGMAS = (2.0, 4.0)
 TENTHS = 10
 # The eight corners of the RGB cube: the inks (and white paper) of the colour Floyd-Steinberg baseline.
 CUBE = [(r, g, b) for r in (0, 255) for g in (0, 255) for b in (0, 255)]
-FS_UPSCALE = 4
 # The worst tenth is taken over tenths holding at least this share of the pixels: a tenth of a few pixels (a
 # blurred cut frame's darkest 1 pixel of 19200) measured one pixel's noise, not a tone.
 WORST_TENTH_SHARE = 1e-3
@@ -213,9 +212,11 @@ def floyd_steinberg(reference, count):
     """The baseline a user would otherwise pick: Floyd-Steinberg error diffusion with about ``count`` dots.
 
     The input is scaled (Pillow, Lanczos) so that its dithered version has about ``count`` ink pixels (the scale
-    is searched), dithered, and drawn back at the input's size as square dots (nearest neighbour to 4x, then
-    area-averaged, so partly covered pixels keep their share). Gray: black and white (Pillow's
-    ``convert("1")``); colour: the eight corners of the RGB cube, ink pixels being the non-white ones.
+    is searched), dithered, and drawn back at the input's size as square dots, each input pixel the exact
+    area average of the dithered pixels over it (``area_average``). Gray: black and white (Pillow's
+    ``convert("1")``); colour: the eight corners of the RGB cube, ink pixels being the non-white ones. (Until
+    2026-11-26 the dots were drawn back through a nearest-neighbour 4x enlargement, which moved their edges by up
+    to an eighth of an input pixel: FS measured 0.0055 instead of 0.0038 at sigma 4 px on a line drawing.)
 
     Parameters
     ----------
@@ -237,9 +238,24 @@ def floyd_steinberg(reference, count):
     image = Image.fromarray(np.round(np.clip(reference, 0, 1) * 255).astype(np.uint8), "RGB" if colour else "L")
     dither = _dither_cube if colour else _dither_black
     dithered, dots = _search_scale(image, count, dither)
-    rows, columns = np.shape(reference)[:2]
-    big = dithered.resize((columns * FS_UPSCALE, rows * FS_UPSCALE), Image.Resampling.NEAREST)
-    return on_grid(np.asarray(big, dtype=np.float32) / 255.0, (rows, columns)), dots
+    return area_average(np.asarray(dithered, dtype=np.float64) / 255.0, np.shape(reference)[:2]), dots
+
+
+def area_average(picture, shape):
+    """``picture`` (``(h, w)`` or ``(h, w, channels)``) stretched over a grid of ``shape = (rows, columns)``, each
+    grid cell the exact area average of the picture's pixels over it (any ratio of sizes)."""
+    rows_weights = _overlaps(shape[0], picture.shape[0])
+    columns_weights = _overlaps(shape[1], picture.shape[1])
+    averaged = np.tensordot(np.tensordot(rows_weights, picture, axes=(1, 0)), columns_weights, axes=(1, 1))
+    return np.clip(np.moveaxis(averaged, -1, 1), 0.0, 1.0)
+
+
+def _overlaps(cells, pixels):
+    """``(cells, pixels)``: the share of each of ``cells`` equal cells of [0, 1] that each of ``pixels`` covers."""
+    cell_edges, pixel_edges = np.linspace(0, 1, cells + 1), np.linspace(0, 1, pixels + 1)
+    low = np.maximum(cell_edges[:-1, None], pixel_edges[None, :-1])
+    high = np.minimum(cell_edges[1:, None], pixel_edges[None, 1:])
+    return np.clip(high - low, 0.0, None) * cells
 
 
 def _dither_black(image):
