@@ -190,3 +190,31 @@ def test_closed_stdout_is_refused_before_the_work(folder, command):
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
     assert snapshot(folder) == before
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["torus", "-", *FAST, "-o", "o.csv"], ["evaluate", "-", "in.png"], ["torus", "in.png", *FAST, "--init", "-"]],
+)
+def test_closed_stdin_is_one_line(folder, command):
+    """'-' with standard input closed (``<&-``) ended in an AttributeError traceback."""
+    import os
+
+    before = snapshot(folder)
+    result = subprocess.run(
+        [sys.executable, "-m", "stipple", *command],
+        cwd=folder,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        preexec_fn=lambda: os.close(0),
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot read '-' (stdin): it is closed"]
+    assert snapshot(folder) == before
+
+
+@pytest.mark.parametrize("command", [["torus", "in.png", *FAST, "-o", "-"], ["design", "-t", "3", "-o", "d.csv"]])
+def test_a_checkpoint_on_stdout_is_refused(folder, command):
+    """``--checkpoint -`` wrote the zip to stdout, glued to the CSV, and could not be resumed."""
+    refused([*command, "--checkpoint", "-"], folder, "--checkpoint must name a file, not '-'")

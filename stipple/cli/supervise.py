@@ -138,6 +138,8 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=(), formats=FORMATS)
         check_writable(path)
     if list(outputs).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
+    if checkpoint is not None and str(checkpoint) == "-":
+        raise StippleError("--checkpoint must name a file, not '-': a checkpoint is saved, replaced and resumed")
     piped = [role for role, path in inputs if path is not None and str(path) == "-"]
     if len(piped) > 1:
         raise StippleError(f"'-' (stdin) may be given only once, not for both {' and '.join(piped)}")

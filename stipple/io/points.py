@@ -3,12 +3,11 @@ value checked (``read_table``; ``stipple.pipelines.inputs`` makes them torus or 
 
 import io
 import shlex
-import sys
 
 import numpy as np
 
 from ..errors import StippleError
-from .sources import STDIN_NAME, read_source
+from .sources import STDIN_NAME, read_source, stdin_stream
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
@@ -72,7 +71,7 @@ def read_table(source, max_rows, labels=False):
     ``(kind, points, names)``.
     """
     name = STDIN_NAME if source == "-" else source
-    data = read_source(sys.stdin.buffer if source == "-" else source)
+    data = read_source(stdin_stream() if source == "-" else source)
     first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
     columns = {column.strip().lower() for column in first_line.split(",")}
 

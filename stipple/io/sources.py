@@ -17,6 +17,8 @@ _STDIN = [None, b""]
 
 def stdin_stream():
     """A seekable copy of standard input named ``<stdin>``, read (bounded) once per input stream."""
+    if sys.stdin is None:
+        raise StippleError("cannot read '-' (stdin): it is closed")
     stream = sys.stdin.buffer
     if _STDIN[0] is not stream:
         _STDIN[:] = [stream, read_source(stream)]

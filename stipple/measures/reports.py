@@ -3,14 +3,13 @@ of point file (torus dots, sphere points, layered inks, one line); a drawn pictu
 (``stipple.measures.picture``); and the reports' text form."""
 
 import io
-import sys
 
 import numpy as np
 
 from ..colour import check_layer_names, parse_palette, separate
 from ..errors import StippleError
 from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
-from ..io.sources import STDIN_NAME, read_source
+from ..io.sources import STDIN_NAME, read_source, stdin_stream
 from ..line.problem import line_problem
 from ..multiclass import class_bandwidth
 from ..render.pen import closed_length
@@ -173,7 +172,7 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
     diffusion with about that many dots.
     """
     drawn = load_colour(picture_source, name=str(picture_source))
-    data = read_source(sys.stdin.buffer if input_source == "-" else input_source)
+    data = read_source(stdin_stream() if input_source == "-" else input_source)
     name = STDIN_NAME if input_source == "-" else str(input_source)
     if colour is None:
         colour = not data.startswith(NPY_MAGIC) and mean_chroma(load_colour(io.BytesIO(data), name)) > GRAY_CHROMA
