@@ -155,6 +155,16 @@ def test_cli_writes_a_full_precision_design_and_resumes(tmp_path):
     assert out.read_bytes() == finished
 
 
+def test_cli_measures_the_final_points_accurately_when_epsilon_is_loose(tmp_path):
+    """At --epsilon 1e-2 the run's own transforms reported 9.65e-11 <= 1e-10 and exited 0; the points' largest
+    error, measured at 1e-12, is about 1e-3: not a design."""
+    out = tmp_path / "d.csv"
+    result = CliRunner().invoke(main, ["design", "-t", "5", "--epsilon", "1e-2", "--threads", "1", "-o", str(out)])
+    assert result.exit_code == 3, result.output
+    assert "too loose for the target" in result.output
+    assert harmonic_errors(np.loadtxt(out, delimiter=",", skiprows=1), 5).max() > 1e-6
+
+
 def test_cli_exit_code_says_when_the_points_are_not_a_design(tmp_path):
     """t = 10 has no design of 40 points: the run stalls; a script must tell it from a design (it exited 0)."""
     result = CliRunner().invoke(main, ["design", "-t", "10", "-M", "40", "--threads", "1", "-q", "-o", "-"])

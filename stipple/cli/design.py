@@ -73,7 +73,16 @@ def design_options(function):
 def design(ctx, **options):
     """A numerical spherical design of strength t: M points whose equal-weight rule integrates every spherical
     harmonic of degree 1..t to within --error (CSV in full precision)."""
-    from ..design import GRADIENT_FLOOR, STARTS, ErrorTarget, design_outcome, design_problem, start_points
+    from ..design import (
+        DESIGN_EPSILON,
+        GRADIENT_FLOOR,
+        STARTS,
+        ErrorTarget,
+        accurate_check,
+        design_outcome,
+        design_problem,
+        start_points,
+    )
     from ..io.commit import output_format
     from ..pipelines.inputs import read_sphere_init
     from ..pipelines.outputs import sphere_files
@@ -87,18 +96,17 @@ def design(ctx, **options):
         view = parse_view(options["view"])
         init_file = [] if options["init"] in STARTS else [("--init file", options["init"])]
         with guarded_files(init_file, options["outputs"], options["checkpoint"]):
+            epsilon = DESIGN_EPSILON if options["epsilon"] is None else options["epsilon"]
             problem = design_problem(
-                options["strength"],
-                options["n_points"],
-                threads=options["threads"],
-                epsilon=1e-12 if options["epsilon"] is None else options["epsilon"],
+                options["strength"], options["n_points"], threads=options["threads"], epsilon=epsilon
             )
             target = ErrorTarget(problem.discrepancy, options["error"])
             options.update(tol=GRADIENT_FLOOR, safeguard=False)
             init = options["init"] if options["init"] in STARTS else read_sphere_init(options["init"])
             init = start_points(options["strength"], problem.n_points, init, options["seed"])
             result, stopped_by = solve(problem, options, init, stop=target)
-            result = design_outcome(result, target)
+            accurate = accurate_check(options["strength"], problem.n_points, options["threads"], epsilon)
+            result = design_outcome(result, target, accurate)
             files = sphere_files(
                 result.points,
                 lon_lat(result.points),
