@@ -33,6 +33,11 @@ INK_COLOURS = {
 TIE_BREAK = 1e-3
 MAX_PENS = 8
 MIN_ABSORPTANCE = 0.05
+# Darkness below this is the rounding of a sum of weights (white paper), not ink.
+ROUNDING = 1e-12
+# The union term's weight against each ink's: beyond this the inks' own terms are rounding in the sum
+# (1e300 overflowed to a NaN step, 1e150 to a RuntimeWarning).
+MAX_UNION_WEIGHT = 1e6
 
 
 def parse_palette(text):
@@ -128,7 +133,9 @@ def separate(rgb, separation="cmyk", black=1.0):
     if not 0 <= black <= 1:
         raise StippleError(f"black must be in [0, 1], not {black!r}")
     if separation == "gray":
-        densities = {"black": 1.0 - rgb @ LUMA}
+        # White's luminance sums the weights to 1 - 1.1e-16: below ROUNDING the paper is white.
+        darkness = 1.0 - rgb @ LUMA
+        densities = {"black": np.where(darkness < ROUNDING, 0.0, darkness)}
     else:
         inks = 1.0 - rgb
         grey = black * inks.min(axis=2) if separation == "cmyk" else np.zeros(rgb.shape[:2])
@@ -153,6 +160,12 @@ def _with_mass(layers):
     if not layers:
         raise StippleError("the image is blank (all white): there is nothing to place dots on")
     return layers
+
+
+def check_union_weight(union_weight):
+    """Raise unless the union's weight is a number in [0, MAX_UNION_WEIGHT]."""
+    if not (np.isfinite(union_weight) and 0 <= union_weight <= MAX_UNION_WEIGHT):
+        raise StippleError(f"--union-weight must be a number in [0, {MAX_UNION_WEIGHT:g}], not {union_weight!r}")
 
 
 def union_darkness(layers):
@@ -229,8 +242,7 @@ def colour_problem(
     layers = separate(rgb, separation, black)
     if placement is not None:
         layers = placed_layers(layers, placement)
-    if not (np.isfinite(union_weight) and union_weight >= 0):
-        raise StippleError(f"union weight must be a finite non-negative number, not {union_weight!r}")
+    check_union_weight(union_weight)
     term_weights = [1.0] * len(layers) + [float(union_weight) if len(layers) > 1 else 0.0]
     problem = multiclass_problem(
         [layer.density for layer in layers],

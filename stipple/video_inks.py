@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .colour import placement_scale, separate
+from .colour import check_union_weight, placement_scale, separate
 from .multiclass import class_counts, class_slices, multiclass_problem
 
 # An ink with dots but no ink in a frame gets this even density: its dots spread out (and are drawn with no area).
@@ -22,6 +22,7 @@ class Inks:
     and the dots each gets (in proportion to its ink there, ``class_counts``), so that dot i stays ink i's."""
 
     def __init__(self, settings, key=None):
+        check_union_weight(settings.union_weight)
         self.settings, self.layers, self.counts = settings, None, None
         self.names, self.term_weights = [], []
         self._key = key

@@ -115,3 +115,18 @@ def test_vpype_reads_stipples_svg_with_layers_colours_and_every_dot(flag, tmp_pa
         drawn = 200 + svg.read_text().count('class="copy"')
         assert len(document.layers) == 3 and sum(len(layer) for layer in document.layers.values()) == drawn
         assert colours == [vpype.Color("#00a0e0"), vpype.Color("#e0007a"), vpype.Color("#000000")], svg.name
+
+
+def test_a_white_image_is_blank_in_gray_too():
+    """White's luminance weights sum to 1 - 1.1e-16: --palette gray stippled an all-white image."""
+    with pytest.raises(StippleError, match="blank"):
+        separate(np.ones((6, 8, 3)), "gray")
+    assert separate(np.full((6, 8, 3), 0.5), "gray")[0].density == pytest.approx(np.full((6, 8), 0.5))
+
+
+@pytest.mark.parametrize("weight", [1e300, -1.0, float("nan")])
+def test_union_weight_out_of_range_is_refused(weight):
+    from stipple.colour import colour_problem
+
+    with pytest.raises(StippleError, match=r"--union-weight must be a number in \[0, 1e\+06\]"):
+        colour_problem(np.full((6, 8, 3), 0.5), 50, union_weight=weight)
