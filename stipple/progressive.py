@@ -117,8 +117,12 @@ def progressive_problem(
     """
     from .errors import StippleError
 
-    if not (isinstance(levels, (int, np.integer)) and 1 <= levels <= max(int(n_points), 1)):
-        raise StippleError(f"levels must be an integer in [1, M = {n_points}], not {levels!r}")
+    if not isinstance(levels, (int, np.integer)) or levels < 1:
+        raise StippleError(f"the progressive order's passes must be a positive integer, not {levels!r}")
+    if levels > n_points:
+        raise StippleError(
+            f"--order progressive draws {levels} passes, so it needs at least {levels} dots, not -M {n_points}"
+        )
     options = {"backend": backend, "threads": threads, "epsilon": epsilon, "hessian": hessian, "near_field": near_field}
     full = torus_problem(weights, n_points, bandwidth, **options, **TERM_SETTINGS)
     ends = np.cumsum(pass_counts(n_points, levels))

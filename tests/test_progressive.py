@@ -270,3 +270,14 @@ def test_low_frequency_correction_runs_on_the_full_set():
     problem = progressive_problem(density(), 48, threads=1)
     coarse = problem.coarse(8)
     assert coarse.n_points == 48 and coarse.bandwidth == 8 and problem.settle > 0
+
+
+def test_too_few_dots_for_the_passes_is_named_so(tmp_path):
+    """The message said 'levels must be an integer in [1, M = 3]', which reads as the unrelated --levels."""
+    image = tmp_path / "g.png"
+    Image.fromarray(np.tile(np.linspace(0, 255, 16).astype(np.uint8), (12, 1))).save(image)
+    result = CliRunner().invoke(
+        main, ["torus", str(image), "-M", "3", "-q", "--order", "progressive", "-o", str(tmp_path / "o.svg")]
+    )
+    assert result.exit_code == 1
+    assert "--order progressive draws 4 passes, so it needs at least 4 dots, not -M 3" in result.output
