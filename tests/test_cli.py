@@ -189,3 +189,10 @@ def test_the_dark_image_note_offers_invert_only_where_it_has_light_parts(tmp_pat
     if hinted:
         inverted = run(["torus", tmp_path / "dark.png", "-M", 40, "-N", 8, "--iterations", 1, "--invert", "-q"])
         assert inverted.exit_code == 0, inverted.output
+
+
+def test_checkpoint_every_without_a_checkpoint_is_refused(image_path, tmp_path):
+    args = ["torus", image_path, "-M", 20, "-N", 8, "--iterations", 2, "-q", "-o", tmp_path / "d.csv"]
+    result = run([*args, "--checkpoint-every", 5])
+    assert result.exit_code == 1 and "--checkpoint-every is for --checkpoint" in result.output
+    assert run([*args, "--checkpoint-every", 5, "--checkpoint", tmp_path / "c.npz"]).exit_code == 0

@@ -110,6 +110,16 @@ class SignalGuard:
 SIGNALS = SignalGuard()
 
 
+def checkpoint_interval(options):
+    """``(seconds, iterations)`` of ``--checkpoint-every``, refused when given on the command line without
+    ``--checkpoint`` (it would be ignored; a config file may set it for the runs that checkpoint)."""
+    context = click.get_current_context(silent=True)
+    source = None if context is None else context.get_parameter_source("checkpoint_every")
+    if source is click.core.ParameterSource.COMMANDLINE and options.get("checkpoint") is None:
+        raise StippleError("--checkpoint-every is for --checkpoint: without it, it would be ignored")
+    return parse_every(options["checkpoint_every"])
+
+
 def parse_every(text):
     """``"60s"``, ``"5m"`` (seconds) or ``"100"`` / ``"100it"`` (iterations) -> (seconds, iterations)."""
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m|h|it)?\s*", str(text))
@@ -229,7 +239,7 @@ def supervised(options, launch, stop=None, announce=None):
     checkpoint interval and of the seed. Returns the result and the signal that stopped it (or None)."""
     from ..halftone import chain_callbacks, check_integer
 
-    seconds, iterations = parse_every(options["checkpoint_every"])
+    seconds, iterations = checkpoint_interval(options)
     if announce is not None:
         announce()
     check_integer("seed", options["seed"], 0, 2**63 - 1)

@@ -19,7 +19,7 @@ from .options import (
     resolve_input,
     without,
 )
-from .supervise import SIGNALS, Progress, guarded_files, parse_every
+from .supervise import SIGNALS, Progress, checkpoint_interval, guarded_files
 
 DEFAULT_FPS = 24.0
 
@@ -197,7 +197,7 @@ def run_frames(frames, settings, outputs, options):
     (dropped), saves the checkpoint and writes the frames finished. Returns the result and that signal."""
     from ..video import stipple_video
 
-    seconds, count = parse_every(options["checkpoint_every"])
+    seconds, count = checkpoint_interval(options)
     progress = FrameProgress(frames.count, not options["quiet"] and sys.stderr.isatty())
 
     colour = settings.palette is not None
