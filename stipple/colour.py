@@ -162,6 +162,24 @@ def _with_mass(layers):
     return layers
 
 
+def check_palette_extras(palette, black, union_weight=1.0):
+    """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both),
+    ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component), and
+    ``--union-weight`` with one ink (gray, or one pen colour: the union is that ink)."""
+    inks = None if palette is None else parse_palette(palette)
+    one_ink = inks == "gray" or (isinstance(inks, list) and len(inks) == 1)
+    if one_ink and union_weight != 1.0:
+        raise StippleError(f"--union-weight is for several inks, not --palette {palette}: it would be ignored")
+    if palette is None:
+        given = [name for name, value in (("--black", black), ("--union-weight", union_weight)) if value != 1.0]
+        if given:
+            raise StippleError(f"{' and '.join(given)}: for runs with --palette; without it they would be ignored")
+    elif black != 1.0 and inks != "cmyk":
+        raise StippleError(
+            f"--black is for --palette cmyk (its black ink), not --palette {palette}: it would be ignored"
+        )
+
+
 def check_union_weight(union_weight):
     """Raise unless the union's weight is a number in [0, MAX_UNION_WEIGHT]."""
     if not (np.isfinite(union_weight) and 0 <= union_weight <= MAX_UNION_WEIGHT):

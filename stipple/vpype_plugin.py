@@ -15,7 +15,7 @@ import numpy as np
 import vpype as vp
 import vpype_cli
 
-from .colour import halftone_colour, parse_palette
+from .colour import check_palette_extras, halftone_colour, parse_palette
 from .errors import StippleError
 from .line import LINE_ITERATIONS
 from .multiclass import class_slices
@@ -109,6 +109,8 @@ def kept_passes(counts, kept):
 def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
+        check_lengths(width=width, pen_width=pen_width, dot_radius=dot_radius, seed=options["seed"])
+        check_palette_extras(options["separation"], options["black"], options["union_weight"])
         n_points = plugin_count(n_points, image, width, pen_width, options)
         drawn, height = pen_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
     except StippleError as error:
@@ -127,6 +129,16 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
 stipple.help_group = "Plugins"
 
 CSS_PIXEL_MM = 25.4 / 96
+
+
+def check_lengths(seed, **lengths):
+    """Refuse, in one line, a length that is not positive and finite (None: not given) and a negative seed, as
+    stipple's commands do (the plug-in drew ``stroke-width="-3.78"`` or raised from deep inside)."""
+    for name, value in lengths.items():
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise StippleError(f"--{name.replace('_', '-')} must be a positive length, not {value:g} (CSS pixels)")
+    if not 0 <= seed < 2**63:
+        raise StippleError(f"--seed must be an integer in [0, 2^63), not {seed!r}")
 
 
 def plugin_count(text, image, width, pen_width, options):
@@ -174,6 +186,7 @@ def line_path(image, n_vertices, *, width, length=None, invert=False, **options)
 def stippleline(document, image, n_vertices, width, pen_width, **options):
     """Draw IMAGE as one closed line in one new layer (the image's top-left corner at the origin)."""
     try:
+        check_lengths(width=width, pen_width=pen_width, seed=options["seed"])
         path, height = line_path(image, n_vertices, width=width, **options)
     except StippleError as error:
         raise click.ClickException(str(error)) from None

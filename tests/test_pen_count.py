@@ -194,6 +194,28 @@ def test_vpype_plugin_auto_count(tmp_path):
         vpype_cli.execute(f"stipple -M lots {image}")
 
 
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ("-w 0", "--width must be a positive length"),
+        ("--pen-width -1mm", "--pen-width must be a positive length"),
+        ("-M auto --dot-style point --pen-width 0", "--pen-width must be a positive length"),
+        ("--dot-radius -1mm", "--dot-radius must be a positive length"),
+        ("--seed -1", "--seed must be an integer"),
+        ("--palette cmy --black 0.5", "--black is for --palette cmyk"),
+    ],
+)
+def test_vpype_plugin_refuses_bad_options_in_one_line(tmp_path, options, message):
+    """The plug-in drew stroke-width="-3.78" for --pen-width -1mm and raised ZeroDivisionError for a 0 pen."""
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import click
+    import vpype_cli
+
+    image = flat_gray(tmp_path, 0.3, size=16)
+    with pytest.raises(click.ClickException, match=message):
+        vpype_cli.execute(f"stipple -M 40 --iterations 2 {options} {image}")
+
+
 @pytest.mark.parametrize("radius", [0.3, 0.5, 0.8, 1.2, 3.0])
 @pytest.mark.parametrize("blend", ["over", "multiply"])
 def test_a_png_disc_inks_its_area_at_any_size(radius, blend, rng):

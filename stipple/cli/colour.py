@@ -8,7 +8,6 @@ from ..errors import StippleError
 from .defaults import INITS
 from .options import (
     backend_option,
-    check_palette_extras,
     common_options,
     given_count_hint,
     palette_options,
@@ -30,6 +29,7 @@ from .recipes import colour_recipe, run_pipeline
 @click.pass_context
 def colour(ctx, image, **options):
     """Stipple a colour IMAGE with one layer of dots per ink (CSV x,y,layer; SVG one layer per pen)."""
+    from ..colour import check_palette_extras
     from ..pipelines.colour import stipple_colour
 
     started = time.perf_counter()

@@ -7,7 +7,6 @@ import click
 from ..errors import StippleError
 from .options import (
     backend_option,
-    check_palette_extras,
     common_options,
     given_count_hint,
     init_input,
@@ -53,6 +52,8 @@ from .recipes import colour_recipe, run_pipeline, torus_recipe
 def torus(ctx, image, **options):
     """Stipple IMAGE (PNG, JPEG, TIFF, ..., or a .npy map; '-' for stdin) on the torus; with --palette, one
     layer of dots per ink (as 'stipple colour')."""
+    from ..colour import check_palette_extras
+
     started = time.perf_counter()
     image = resolve_input(ctx, image)
     if image is None:

@@ -10,7 +10,6 @@ from . import supervise
 from .defaults import FRAME_ITERATIONS
 from .options import (
     backend_option,
-    check_palette_extras,
     common_options,
     init_input,
     palette_options,
@@ -137,7 +136,7 @@ def video_settings(options, shape, draw):
     the drawing's settings: pen dots are placed by the darkness clipped at the pen's reach)."""
     from functools import partial
 
-    from ..colour import check_union_weight, parse_palette
+    from ..colour import check_palette_extras, check_union_weight, parse_palette
     from ..halftone import check_integer
     from ..pipelines.inputs import read_torus_init
     from ..pipelines.pen import placement_density
