@@ -117,7 +117,7 @@ def design(ctx, **options):
                 ink=1.0,
                 **settings,
             )
-            write_outputs(options["outputs"], files)
+            write_outputs(options["outputs"], files, options["quiet"])
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

@@ -72,7 +72,7 @@ def line(ctx, image, **options):
                 ink=float(weights.mean()),
                 **colours,
             )
-            write_outputs(options["outputs"], files)
+            write_outputs(options["outputs"], files, options["quiet"])
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

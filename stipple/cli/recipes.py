@@ -109,7 +109,7 @@ def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers)
         outputs, stopped_by = supervised(options, launch)
         report_run(outputs.result, options)
         report_travel(outputs, options, recipe)
-        write_outputs(options["outputs"], outputs.files)
+        write_outputs(options["outputs"], outputs.files, options["quiet"])
     finish(outputs.result, stopped_by, options, started)
 
 

@@ -102,7 +102,7 @@ def render(
                         f"{', '.join(given)}: for one ink's points (a colour run's are drawn from its inks)"
                     )
                 files = redraw(points, names, formats, like, size, (palette, black), options)
-                write_outputs(outputs, files)
+                write_outputs(outputs, files, options["quiet"])
                 return
             if palette is not None or black is not None:
                 raise StippleError("--palette and --black are for layered points (a CSV with a layer column)")
@@ -118,7 +118,7 @@ def render(
                 files = sphere_files(
                     points, degrees, formats, coords=coords, projection=projection, view=angles, **settings
                 )
-                write_outputs(outputs, files)
+                write_outputs(outputs, files, options["quiet"])
                 return
             shape, darkness, wrapped = torus_canvas(points, like, size, {"invert": options["invert"], **transfer})
             if darkness is not None:  # the ink a pen's dots carry, as the run drew them
@@ -129,7 +129,7 @@ def render(
             points = wrapped
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
-            write_outputs(outputs, torus_files(unit, shape, formats, settings, darkness))
+            write_outputs(outputs, torus_files(unit, shape, formats, settings, darkness), options["quiet"])
     except StippleError as error:
         raise click.ClickException(str(error)) from None
 

@@ -105,7 +105,7 @@ def sphere(ctx, map_source, **options):
                 darkness_at=picture_darkness(density),
                 **settings,
             )
-            write_outputs(options["outputs"], files)
+            write_outputs(options["outputs"], files, options["quiet"])
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

@@ -13,15 +13,22 @@ from ..render.globe import sphere_drawing
 PICTURES = (".svg", ".png")
 
 
+class OutputFiles(dict):
+    """``{format: bytes}``, and the ``warnings`` of the drawing they hold (lines a user must see: dots left out)."""
+
+    warnings = ()
+
+
 def output_files(formats, points_bytes, drawing):
-    """``{format: bytes}`` for each of ``formats``: ``points_bytes(format)`` for CSV and GeoJSON, and SVG and PNG
+    """``OutputFiles`` for each of ``formats``: ``points_bytes(format)`` for CSV and GeoJSON, and SVG and PNG
     from the one ``drawing()``, made when the first of them is asked for."""
     made = []
-    files = {}
+    files = OutputFiles()
     for fmt in formats:
         if fmt in PICTURES:
             if not made:
                 made.append(drawing())
+                files.warnings = made[0].warnings
             files[fmt] = drawing_bytes(made[0], fmt)
         else:
             files[fmt] = points_bytes(fmt)

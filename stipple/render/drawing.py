@@ -13,8 +13,9 @@ class Drawing:
     Either ``layers`` of dots (``stipple.render.dots.Dots``: centres, radii, colours, foreshortening, pen paths),
     laid on ``background`` one over the other (``blend`` "over") or printed as inks ("multiply"), pen paths
     stroked ``pen_width`` user units wide; or one closed ``line`` (vertices in user units) stroked ``stroke``
-    wide in ``line_colour`` on ``background``. ``notes`` describe it (SVG comments); ``outline``, a box ``(left,
-    top, right, bottom)``, is the globe's disc, shaded under the first layer in the PNG.
+    wide in ``line_colour`` on ``background``. ``notes`` describe it (SVG comments), ``warnings`` are the notes a
+    user must also see (dots left out); ``outline``, a box ``(left, top, right, bottom)``, is the globe's disc,
+    shaded under the first layer in the PNG.
     """
 
     size: tuple
@@ -25,6 +26,7 @@ class Drawing:
     pen_width: float | None = None
     blend: str = "over"
     notes: tuple = ()
+    warnings: tuple = ()
     outline: tuple | None = None
     line: object = None
     stroke: float = 1.0

@@ -51,7 +51,7 @@ def layered_drawing(
     (a plotter preview in the PNG). ``notes`` (lines of text, e.g. why ``-M auto`` chose M) are added to the
     drawing's own notes (the SVG's comments and description).
     """
-    extra_notes = list(notes)
+    extra_notes, warnings = list(notes), []
     rows, columns = shape
     count = sum(len(points) for _, _, points in layers)
     placed = [(name, colour, points * np.array([columns, rows])) for name, colour, points in layers]
@@ -74,7 +74,7 @@ def layered_drawing(
         notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
         left_out = count - sum(len(dots.centres) for dots in drawn)
         if left_out:
-            notes.append(f"{left_out} dots left out where the pen's dots would touch (the darkest tones)")
+            warnings.append(f"{left_out} of {count} dots left out where the pen's dots would touch (the darkest tones)")
     return Drawing(
         (columns, rows),
         width,
@@ -83,7 +83,8 @@ def layered_drawing(
         background=background,
         pen_width=pen,
         blend=blend,
-        notes=(*notes, *extra_notes),
+        notes=(*notes, *warnings, *extra_notes),
+        warnings=tuple(warnings),
     )
 
 

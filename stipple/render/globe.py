@@ -63,6 +63,7 @@ def sphere_drawing(
         return _sphere_picture([drawn], canvas, projection, width, png_width, background, pen, notes)
     per_radian = canvas[0] / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
     tone = 2 * np.sqrt((0.5 if ink is None else ink) / max(len(points), 1))
+    warnings = []
     angles = (
         capped_radii(angular_distances(points), tone) if fixed is None else np.full(len(points), fixed / per_radian)
     )
@@ -87,9 +88,11 @@ def sphere_drawing(
             drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
             drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
             if left_out:
-                notes.append(f"{left_out} dots left out where the pen's dots would touch (near the limb)")
+                warnings = [
+                    f"{left_out} of {len(points)} dots left out where the pen's dots would touch (near the limb)"
+                ]
     layers = with_pen_paths([drawn], dot_style, pen)
-    return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes)
+    return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings)
 
 
 def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
@@ -109,7 +112,7 @@ def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
     return tone_dots([("dots", color, centres)], canvas, [coverage])[0], [note]
 
 
-def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes):
+def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings=()):
     """The ``Drawing`` of a sphere picture's layers (the globe's outline under an orthographic PNG)."""
     count = sum(len(dots.centres) for dots in layers)
     low, high = (1 - GLOBE) / 2 * ORTHO_SIZE, (1 + GLOBE) / 2 * ORTHO_SIZE
@@ -120,6 +123,7 @@ def _sphere_picture(layers, canvas, projection, width, png_width, background, pe
         layers,
         background=background,
         pen_width=pen,
-        notes=tuple(notes),
+        notes=(*notes, *warnings),
+        warnings=tuple(warnings),
         outline=(low, low, high, high) if projection == "ortho" else None,
     )
