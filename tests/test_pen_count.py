@@ -123,8 +123,12 @@ def test_too_few_point_dots_for_the_ink_get_a_note_with_the_count_that_carries_i
     ]
     few = CliRunner().invoke(main, [*arguments, "-M", "200", "-o", str(tmp_path / "few.svg")])
     assert few.exit_code == 0 and "point dots of a 0.5 mm pen ink" in few.output, few.output
-    tone = int(few.output.split("about ")[1].split(")")[0])
+    tone = int(few.output.split("carry its ink, ")[1].split(")")[0])
     assert tone == pytest.approx(0.4 * 20 * 20 / ((np.pi / 4 + 0.1) * 0.25), rel=0.01)  # a 20 mm square page
+    # The count -M auto makes of the same page (it named the ink of tones the pen cannot reach: a dark image's
+    # note said 10763 where -M auto drew 6792).
+    auto = CliRunner().invoke(main, [*arguments, "-M", "auto", "-o", str(tmp_path / "auto.svg")])
+    assert f"-M auto: {tone} dots" in auto.output, auto.output
     enough = CliRunner().invoke(main, [*arguments, "-M", str(tone), "-o", str(tmp_path / "enough.svg")])
     assert enough.exit_code == 0 and "point dots" not in enough.output
     # More than fit without touching: the drawing leaves dots out (a colour run of 20000 left out 8044), and says so.
@@ -371,3 +375,15 @@ def test_dots_left_out_are_said_on_stderr_unless_quiet(tmp_path):
     assert line.split("note: ")[1] in (tmp_path / "f.svg").read_text()
     quiet = CliRunner().invoke(main, [*base, "-q"])
     assert quiet.exit_code == 0 and "left out" not in quiet.output
+
+
+def test_the_lighter_note_names_the_count_that_m_auto_makes_on_a_dark_page(tmp_path):
+    """A page darker than the pen reaches: the note named the dots of all its ink (10763 on a dark photo), which
+    -M auto then refused as more than fit (6792)."""
+    image = flat_gray(tmp_path, 0.15)
+    arguments = ["torus", str(image), "--iterations", "2", "--dot-style", "point", "--pen-width", "0.5mm"]
+    arguments += ["--width", "20mm"]
+    few = CliRunner().invoke(main, [*arguments, "-M", "100", "-o", str(tmp_path / "few.svg")])
+    carried = int(few.output.split("carry its ink, ")[1].split(")")[0])
+    auto = CliRunner().invoke(main, [*arguments, "-M", "auto", "-o", str(tmp_path / "auto.svg")])
+    assert f"-M auto: {carried} dots" in auto.output, (few.output, auto.output)

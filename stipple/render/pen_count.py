@@ -201,14 +201,15 @@ def given_count_notes(darkness, n_points, draw):
         paper_width, pen_width = paper_and_pen(draw)
         paper = paper_area(paper_width, darkness.shape)
         area, _ = pen_dot(style, pen_width)
-        drawn, tone_points = n_points * area / paper, darkness.mean() * paper / area
-        if n_points < LIGHT_SHARE * tone_points:
-            lines.append(
-                f"{n_points} point dots of a {pen_width:g} mm pen ink {drawn:.0%} of the paper for the image's "
-                f"{darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that carry its ink, "
-                f"about {int(round(tone_points))})"
-            )
         packing = packing_count(style, pen_width, paper)
+        # The dots that carry the ink the pen can lay down (tones beyond its reach drawn at it), as -M auto counts.
+        carried = min(float(np.minimum(darkness, reachable_tone(style, pen_width)).mean()) * paper / area, packing)
+        if n_points < LIGHT_SHARE * carried:
+            lines.append(
+                f"{n_points} point dots of a {pen_width:g} mm pen ink {n_points * area / paper:.0%} of the paper for "
+                f"the image's {darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that "
+                f"carry its ink, {int(round(carried))})"
+            )
         if n_points > packing:
             lines.append(
                 f"{n_points} point dots of a {pen_width:g} mm pen are more than the {packing} that fit on this paper "
