@@ -110,6 +110,10 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
         check_lengths(width=width, pen_width=pen_width, dot_radius=dot_radius, seed=options["seed"])
+        if dot_radius is not None and options["dot_style"] == "point":
+            raise StippleError(
+                "--dot-radius does not size --dot-style point (one short pen stroke): it would be ignored"
+            )
         check_palette_extras(options["separation"], options["black"], options["union_weight"])
         n_points = plugin_count(n_points, image, width, pen_width, options)
         drawn, height = pen_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)

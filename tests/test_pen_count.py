@@ -387,3 +387,12 @@ def test_the_lighter_note_names_the_count_that_m_auto_makes_on_a_dark_page(tmp_p
     carried = int(few.output.split("carry its ink, ")[1].split(")")[0])
     auto = CliRunner().invoke(main, [*arguments, "-M", "auto", "-o", str(tmp_path / "auto.svg")])
     assert f"-M auto: {carried} dots" in auto.output, (few.output, auto.output)
+
+
+def test_dot_radius_with_point_dots_is_refused(tmp_path):
+    """A point dot's path does not depend on the radius, which only switched the no-touch rule off (277 pairs)."""
+    image = flat_gray(tmp_path, 0.4)
+    result = CliRunner().invoke(
+        main, ["torus", str(image), "-M", "50", "--dot-style", "point", "--dot-radius", "0.01mm", "-o", "p.svg"]
+    )
+    assert result.exit_code == 1 and "--dot-radius does not size --dot-style point" in result.output

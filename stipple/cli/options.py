@@ -393,6 +393,9 @@ def dot_radius(options):
 
     if options["dot_radius"] is None:
         return None
+    if options.get("dot_style") == "point":
+        # A point dot is one short pen stroke: the radius would not size it, only let the dots touch.
+        raise StippleError("--dot-radius does not size --dot-style point (one short pen stroke): it would be ignored")
     radius, width = parse_length(options["dot_radius"], "dot-radius"), parse_length(options["width"], "width")
     if radius[0] * UNITS[radius[1]] > 0.5 * width[0] * UNITS[width[1]]:
         raise StippleError(
