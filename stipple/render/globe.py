@@ -82,15 +82,14 @@ def sphere_drawing(
             f"{int(visible.sum())} of {len(points)} dots on the visible side (orthographic, view "
             f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
         ]
-        if stroke is not None and fixed is None:
-            # Foreshortening brings dots near the limb closer, but not the pen's width: the pen's dots are kept
-            # apart on the drawing itself (thinned, and each dot's radius capped by its drawn nearest distance).
-            drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
-            drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
-            if left_out:
-                warnings = [
-                    f"{left_out} of {len(points)} dots left out where the pen's dots would touch (near the limb)"
-                ]
+    if stroke is not None and fixed is None:
+        # Foreshortening brings dots near the limb closer (and the map's inset those at its edges), but not the
+        # pen's width: the pen's dots are kept apart on the drawing itself (thinned, and each dot's radius capped
+        # by its drawn nearest distance).
+        drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
+        drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
+        if left_out:
+            warnings = [f"{left_out} of {len(points)} dots left out where the pen's dots would touch"]
     layers = with_pen_paths([drawn], dot_style, pen)
     return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings)
 
