@@ -283,3 +283,41 @@ def test_exact_blurs_match_a_periodic_sum_of_gaussians():
             dx, dy = x - point[0, 0] + mx, y - point[0, 1] + my
             expected += np.exp(-((dx / sx) ** 2 + (dy / sy) ** 2) / 2) / (2 * np.pi * sx * sy)
     np.testing.assert_allclose(test, 0.4 * expected, rtol=1e-7, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """A gray and a colour image, a run's points, picture and pen drawing of the gray one, and a colour picture."""
+    from PIL import Image
+
+    folder = tmp_path_factory.mktemp("made")
+    rows, columns = np.mgrid[0:24, 0:32]
+    Image.fromarray((255 * (0.2 + 0.6 * columns / 32)).astype(np.uint8)).save(folder / "g.png")
+    rgb = np.stack([columns / 32, rows / 24, 0.5 + 0 * rows], axis=-1)
+    Image.fromarray((255 * rgb).astype(np.uint8)).save(folder / "c.png")
+    fast = ["-M", "120", "-N", "12", "--iterations", "3", "-q"]
+    outputs = ["-o", str(folder / "p.csv"), "-o", str(folder / "p.png")]
+    assert CliRunner().invoke(main, ["torus", str(folder / "g.png"), *fast, *outputs]).exit_code == 0
+    pen = ["--dot-style", "circle", "-o", str(folder / "d.svg")]
+    assert CliRunner().invoke(main, ["torus", str(folder / "g.png"), *fast, *pen]).exit_code == 0
+    colour = ["colour", str(folder / "c.png"), *fast, "-o", str(folder / "cp.png")]
+    assert CliRunner().invoke(main, colour).exit_code == 0
+    return folder
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        (["d.svg", "--sigma", "2"], "--sigma: not for a DRAWING.svg's plot estimate"),
+        (["d.svg", "--gamma", "2", "--speed", "3"], "--gamma: not for a DRAWING.svg's plot estimate"),
+        (["p.png", "g.png", "--speed", "2"], "--speed: not for a drawn PICTURE.png"),
+        (["cp.png", "c.png", "--gamma", "2"], "--gamma: for gray measures; a colour picture"),
+        (["p.csv", "g.png", "--lift", "1"], "--lift: not for points"),
+        (["p.csv", "g.png", "--kernel", "nosuch"], "--kernel: for sphere points"),
+        (["p.csv", "g.png", "--lon0", "10"], "--lon0: for sphere points"),
+    ],
+)
+def test_options_a_kind_of_points_does_not_use_are_refused(made, arguments, message):
+    """A held-out sweep found them accepted and ignored: the same output, exit 0."""
+    result = CliRunner().invoke(main, ["evaluate", *(str(made / a) if "." in a else a for a in arguments)])
+    assert result.exit_code == 1 and message in result.output, result.output

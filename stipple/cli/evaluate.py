@@ -102,8 +102,10 @@ def evaluate(
         "black": black,
     }
     if str(points_source).lower().endswith(".svg"):
+        refuse_foreign_options("drawing")
         evaluate_plot(points_source, input_source, json_path, plotter)
         return
+    refuse_foreign_options("picture" if str(points_source).lower().endswith(".png") else "points")
     separation_given = palette != "cmyk" or black != 1.0
     if str(points_source).lower().endswith(".png"):
         if separation_given:
@@ -130,7 +132,7 @@ def evaluate(
             domain, points, names = read_points(points_source, labels=True)
             if names is None and separation_given:
                 raise StippleError(f"{points_source}: --palette and --black are for layered CSVs (one ink here)")
-            check_transfer_applies(points_source, domain, names, options)
+            check_transfer_applies(points_source, domain, names, {**options, "kernel": kernel != "distance"})
             if len(points) < 2:
                 raise StippleError(f"{points_source}: evaluate needs at least 2 points, not {len(points)}")
             if spectrum_path is not None and (domain != "torus" or as_line):
@@ -165,6 +167,41 @@ def report_files(report, json_path, spectrum_path):
     return files
 
 
+# What each kind of POINTS is measured with: a drawing's plot estimate, a picture's measures, points' measures.
+PLOTTER_OPTIONS = {"speed", "travel_speed", "lift", "acceleration"}
+PICTURE_OPTIONS = {"sigmas", "colour", "levels", "inset", "fs_dots", "invert", "gamma", "value_range", "palette"}
+APPLIES = {
+    "drawing": {"points_source", "input_source", "json_path", *PLOTTER_OPTIONS},
+    "picture": {
+        "points_source",
+        "input_source",
+        "json_path",
+        *PICTURE_OPTIONS,
+        "black",
+        "spectrum_path",
+        "bandwidth",
+        "as_line",
+    },
+}
+KINDS = {"drawing": "a DRAWING.svg's plot estimate", "picture": "a drawn PICTURE.png", "points": "points"}
+
+
+def refuse_foreign_options(kind):
+    """Refuse, in one line, the options given on the command line that ``kind`` of POINTS does not use: they were
+    silently ignored (``evaluate d.svg --sigma 2``, ``evaluate p.csv in.png --speed 1``). The options with
+    messages of their own (a picture's for points, --bandwidth for pictures, ...) are left to them."""
+    context = click.get_current_context()
+    applies = APPLIES.get(kind, set(context.params) - PLOTTER_OPTIONS)
+    given = [
+        name
+        for name in context.params
+        if name not in applies and context.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
+    ]
+    if given:
+        flags = [next(p.opts[-1] for p in context.command.params if p.name == name) for name in given]
+        raise click.ClickException(f"{', '.join(flags)}: not for {KINDS[kind]}; it would be ignored")
+
+
 def check_builtin(input_source):
     """Refuse an unknown ``builtin:NAME``, naming the built-in densities (rather than "no such file")."""
     if input_source is None or not str(input_source).startswith("builtin:"):
@@ -191,6 +228,10 @@ def check_transfer_applies(points_source, domain, names, options):
             raise StippleError(f"{points_source}: {', '.join(named)}: not for layered CSVs (measured by their inks)")
     elif domain == "sphere" and given["--levels"]:
         raise StippleError(f"{points_source}: --levels is for images, not for sphere points")
+    sphere_only = {"--uniform": options["uniform"], "--lon0": options["lon0"] != 0.0, "--kernel": options["kernel"]}
+    named = [name for name, present in sphere_only.items() if present]
+    if domain != "sphere" and named:
+        raise StippleError(f"{points_source}: {', '.join(named)}: for sphere points, not for an image's")
 
 
 def warn_unjudged(report, input_source):

@@ -162,6 +162,10 @@ def _check_sigmas(sigmas, shape):
             )
 
 
+# The density's transfer options, as the command line names them, and their keywords here.
+TRANSFER_FLAGS = (("--invert", "invert"), ("--gamma", "gamma"), ("--levels", "levels"), ("--range", "value_range"))
+
+
 def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
     """The picture measures (``stipple.measures.picture``) of a drawn PNG against the input it was drawn from.
 
@@ -177,6 +181,12 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
     if colour is None:
         colour = not data.startswith(NPY_MAGIC) and mean_chroma(load_colour(io.BytesIO(data), name)) > GRAY_CHROMA
     if colour:
+        given = [flag for flag, value in TRANSFER_FLAGS if options.get(value) not in (None, False, 1.0)]
+        if given:
+            raise StippleError(
+                f"{', '.join(given)}: for gray measures; a colour picture is measured against the image's colours "
+                "(give --gray for its luminance)"
+            )
         reference = load_colour(io.BytesIO(data), name)
     else:
         density = load_density(io.BytesIO(data), name=name, **options)
