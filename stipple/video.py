@@ -17,6 +17,7 @@ docs/video.md.
 
 import time
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt
@@ -43,8 +44,14 @@ from .video_keeper import FrameKeeper
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
 # left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 (and 8
 # deformation iterations) leave every frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px in
-# 0.26-0.27 of a cold frame's time (20 and 10: 2.0 dB in 0.31-0.33; docs/video.md).
-FRAME_ITERATIONS = 16
+# 0.26-0.27 of a cold frame's time (20 and 10: 2.0 dB in 0.31-0.33; docs/video.md). They are split: 12 before the
+# deformation and WARM_POLISH after it.
+FRAME_ITERATIONS = 12
+# The deformation shifts a moving object's dots as a whole, and where they meet the freed dots it leaves gaps: a
+# dark disc moving down 5 px a frame came out with white holes (its lightest pixel 0.65-0.80 for 0.05, blurred at
+# 1 px 0.16-0.21 against a cold run's 0.07). WARM_POLISH pinned iterations after the deformation, before the low
+# bandwidth's level, close them (16 + 4: 0.08-0.09) at the same cost as 16 before it.
+WARM_POLISH = 4
 # A warm frame moves the dots within FREE_MARGIN dot spacings of a change in darkness above CHANGE (blurred at one
 # spacing, against the darkness the dots there were placed for); 8-bit noise and compression stay below it.
 CHANGE = 0.02
@@ -330,7 +337,13 @@ def _warm(problem, previous, free, settings, stop, change):
     )
     if result.status == "stopped" or not (changed and settings.correct):
         return result
-    return _correct(problem, result, settings, stop)
+    polish = partial(_polish, pinned, options) if free.any() else None
+    return _correct(problem, result, settings, stop, polish)
+
+
+def _polish(pinned, options, points):
+    """The freed dots' ``WARM_POLISH`` iterations after the deformation (the others pinned)."""
+    return run(pinned, init=points, iterations=WARM_POLISH, correct=False, **options)
 
 
 def _cut_tol(problem, pinned, previous, settings):
@@ -345,9 +358,10 @@ def _cut_tol(problem, pinned, previous, settings):
     return min(settings.tol * iid / start, 0.5)
 
 
-def _correct(problem, result, settings, stop):
-    """A warm frame's correction over all dots: the smooth deformation (``WARM_DEFORMATION``), then the plain
-    ``E_N`` levels (``WARM_LEVELS``); the result counts their iterations."""
+def _correct(problem, result, settings, stop, polish=None):
+    """A warm frame's correction over all dots: the smooth deformation (``WARM_DEFORMATION``), then ``polish``
+    (the freed dots' ``WARM_POLISH`` iterations, if given), then the plain ``E_N`` levels (``WARM_LEVELS``); the
+    result counts their iterations."""
     factor, iterations = WARM_DEFORMATION
     shown = None if stop is None else (lambda _: stop(result.state))
     points, deformed = deform(
@@ -362,6 +376,11 @@ def _correct(problem, result, settings, stop):
     if deformed.status == "stopped":
         return replace(result, status="stopped")
     result = replace(result, points=points, iterations=result.iterations + deformed.iterations)
+    if polish is not None:
+        polished = polish(points)
+        if polished.status == "stopped":
+            return replace(result, status="stopped")
+        result = replace(result, points=polished.points, iterations=result.iterations + polished.iterations)
     result = correct_low_frequencies(problem, result, settings.time_limit, stop, levels=WARM_LEVELS)
     if any(level.status == "stopped" for level in result.corrections):
         return replace(result, status="stopped")

@@ -1,5 +1,6 @@
 """Stippled video (``stipple.video``, ``stipple video``): coherent dots, checkpoints, outputs and bad inputs."""
 
+import io
 import re
 
 import numpy as np
@@ -72,8 +73,13 @@ def test_no_light_halo_ahead_of_a_moving_disc():
     y, x = np.mgrid[0 : weights.shape[0], 0 : weights.shape[1]] + 0.5
     ahead = (x > cx + radius) & (x < cx + radius + 12) & (np.abs(y - cy) < radius)
     image, dots = exact_blurs(weights, done[-1].points, 4.0)
-    cold_image, cold_dots = exact_blurs(weights, halftone_torus(weights, count, bandwidth, threads=1).points, 4.0)
-    cold_worst = np.abs(cold_image - cold_dots).max()
+    # The cold runs' own worst local errors scatter by half between seeds at this size (0.0025-0.0037 over four
+    # seeds): the frame is held to the median of three.
+    cold_worst = []
+    for seed in range(3):
+        cold = halftone_torus(weights, count, bandwidth, threads=1, seed=seed).points
+        cold_worst.append(np.abs(np.subtract(*exact_blurs(weights, cold, 4.0))).max())
+    cold_worst = float(np.median(cold_worst))
     assert (image - dots)[ahead].max() < 1.3 * cold_worst
     assert np.abs(image - dots).max() < 1.3 * cold_worst
 
@@ -473,3 +479,33 @@ def test_frames_are_placed_by_the_settings_placement_each_ink_keeping_its_share(
         share = np.divide(inks, union, out=np.zeros_like(inks), where=union > 0)
         placed = np.divide(frame.density, frame.density.sum(axis=0), out=np.zeros_like(inks), where=union > 0)
         assert placed == pytest.approx(share, abs=1e-12)
+
+
+def test_a_dark_disc_moving_through_its_dots_leaves_no_holes():
+    """A dark disc moving down 5 px a frame over a flat band: the deformation shifted its dots as a whole and left
+    gaps where they met the freed dots, white holes in the disc (blurred at 1 px, 0.20 where the cold frame has
+    0.08). The freed dots' iterations after the deformation close them."""
+    from stipple.io.writers import drawing_bytes
+    from stipple.render.flat import torus_drawing
+
+    height, width = 120, 160
+    rows, columns = np.mgrid[0:height, 0:width]
+
+    def disc_centre(k):
+        return 60, 20 + 5 * k
+
+    def darkness(k):
+        x, y = disc_centre(k)
+        luminance = np.where((columns >= 40) & (columns <= 80), 0.6, 0.35 + 0.6 * columns / (width - 1))
+        return 1 - np.where((columns - x) ** 2 + (rows - y) ** 2 < 14**2, 0.05, luminance)
+
+    frames = []
+    stipple_video(((k, darkness(k)) for k in range(3)), VideoSettings(n_points=8000, threads=1), on_frame=frames.append)
+    lightest = []
+    for frame in frames:
+        drawing = torus_drawing(frame.points, (height, width), darkness=frame.density, png_width=4 * width)
+        picture = Image.open(io.BytesIO(drawing_bytes(drawing, ".png"))).convert("F").resize((width, height), Image.BOX)
+        x, y = disc_centre(frame.index)
+        inside = (columns - x) ** 2 + (rows - y) ** 2 <= 11**2
+        lightest.append(gaussian_filter(np.asarray(picture) / 255, 1.0)[inside].max())
+    assert max(lightest[1:]) <= 1.5 * lightest[0], lightest

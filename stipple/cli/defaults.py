@@ -11,7 +11,7 @@ DEFAULT_SETTLE = 2e-3
 # stipple.transforms
 BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video
-FRAME_ITERATIONS = 16
+FRAME_ITERATIONS = 12
 # stipple.line
 LINE_ITERATIONS = 400
 # stipple.measures.plot_estimate (a common desktop plotter: mm/s pen down, mm/s pen up, seconds per lift)

@@ -49,7 +49,8 @@ DEFAULT_FPS = 24.0
     type=click.IntRange(min=0),
     default=FRAME_ITERATIONS,
     show_default=True,
-    help="CG iterations of every frame after the first (each starts from the previous frame's dots).",
+    help="CG iterations of every frame after the first (each starts from the previous frame's dots), before its "
+    "correction (4 more after its deformation).",
 )
 @click.option(
     "--fps",
