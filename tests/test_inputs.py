@@ -90,3 +90,18 @@ def test_npy_maps_rescale_linearly_with_an_override_range():
     data = buffer.getvalue()
     np.testing.assert_allclose(load_density(io.BytesIO(data)), [[0, 0.5], [0.75, 1]])
     np.testing.assert_allclose(load_density(io.BytesIO(data), value_range=(0, 50)), [[0, 0], [1, 1]])
+
+
+def test_range_and_levels_are_refused_where_they_would_be_ignored(tmp_path):
+    """--range on an image and --levels on a .npy map were accepted and changed nothing."""
+    from PIL import Image
+
+    from stipple.errors import StippleError
+    from stipple.io.images import load_density
+
+    Image.fromarray(np.full((8, 8), 100, np.uint8)).save(tmp_path / "g.png")
+    np.save(tmp_path / "m.npy", np.arange(64.0).reshape(8, 8))
+    with pytest.raises(StippleError, match="--range is for .npy maps"):
+        load_density(tmp_path / "g.png", value_range=(0.0, 1.0))
+    with pytest.raises(StippleError, match="--levels is for images"):
+        load_density(tmp_path / "m.npy", levels="auto")

@@ -113,11 +113,12 @@ SIGNALS = SignalGuard()
 def checkpoint_interval(options):
     """``(seconds, iterations)`` of ``--checkpoint-every``, refused when given on the command line without
     ``--checkpoint`` (it would be ignored; a config file may set it for the runs that checkpoint)."""
+    interval = parse_every(options["checkpoint_every"])
     context = click.get_current_context(silent=True)
     source = None if context is None else context.get_parameter_source("checkpoint_every")
     if source is click.core.ParameterSource.COMMANDLINE and options.get("checkpoint") is None:
         raise StippleError("--checkpoint-every is for --checkpoint: without it, it would be ignored")
-    return parse_every(options["checkpoint_every"])
+    return interval
 
 
 def parse_every(text):

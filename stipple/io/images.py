@@ -197,8 +197,12 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
     if not data:
         raise StippleError(f"{name}: file is empty")
     if data.startswith(NPY_MAGIC):
+        if levels is not None:
+            raise StippleError(f"{name}: --levels is for images; a .npy map is stretched by --range")
         values = rescale(check_grid(load_array(data, name), name), value_range, name)
     else:
+        if value_range is not None:
+            raise StippleError(f"{name}: --range is for .npy maps; an image's gray values are stretched by --levels")
         gray = check_grid(load_gray(data, name), name)
         values = 1.0 - stretch_levels(gray, levels)
         if levels is not None and np.any(gray < 1) and not np.any(values > 0):
