@@ -2,12 +2,14 @@
 kinematics of constant acceleration, and (when vpype is installed) vpype's own length statistics."""
 
 import json
+import re
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from stipple.cli import main
+from stipple.errors import StippleError
 from stipple.io.plot_svg import read_pen_layers
 from stipple.measures.plot_estimate import PlotterSettings, move_times, plot_estimate
 from stipple.pipelines.outputs import torus_files
@@ -213,3 +215,18 @@ def test_svgs_that_vpype_writes(tmp_path):
         assert ours.pen_down * millimetre == pytest.approx(theirs.length(), rel=1e-3)
         assert ours.pen_up * millimetre == pytest.approx(theirs.pen_up_length()[0], abs=1e-6, rel=1e-3)
     assert estimate.layers[0].pen_down == pytest.approx(2 * (30 + 20), rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "settings, message",
+    [
+        ({"speed": 1e-300}, "--speed must be a speed in [0.01, 100000] mm/s"),
+        ({"travel_speed": float("inf")}, "--travel-speed must be a speed"),
+        ({"lift": 1e9}, "--lift must be a time in [0, 60] s"),
+        ({"acceleration": 0.0}, "--acceleration must be in"),
+    ],
+)
+def test_plotter_settings_out_of_a_plotters_range_are_refused(settings, message):
+    """--speed 1e-300 printed a plot time of about 300 digits of hours."""
+    with pytest.raises(StippleError, match=re.escape(message)):
+        PlotterSettings(**settings)

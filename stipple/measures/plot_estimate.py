@@ -21,6 +21,8 @@ from ..errors import StippleError
 DEFAULT_SPEED = 55.0
 DEFAULT_TRAVEL_SPEED = 165.0
 DEFAULT_LIFT = 0.3
+# Bounds a plotter can have (--speed 1e-300 printed a time of 300 digits).
+MIN_SPEED, MAX_SPEED, MAX_LIFT, MAX_ACCELERATION = 0.01, 1e5, 60.0, 1e7
 
 
 @dataclass(frozen=True)
@@ -33,13 +35,18 @@ class PlotterSettings:
     acceleration: float | None = None
 
     def __post_init__(self):
-        for name, value, low in (("speed", self.speed, 0), ("travel-speed", self.travel_speed, 0)):
-            if not (np.isfinite(value) and value > low):
-                raise StippleError(f"--{name} must be a finite speed above 0 mm/s, not {value!r}")
-        if not (np.isfinite(self.lift) and self.lift >= 0):
-            raise StippleError(f"--lift must be a finite time of at least 0 s, not {self.lift!r}")
-        if self.acceleration is not None and not (np.isfinite(self.acceleration) and self.acceleration > 0):
-            raise StippleError(f"--acceleration must be a finite value above 0 mm/s², not {self.acceleration!r}")
+        for name, value in (("speed", self.speed), ("travel-speed", self.travel_speed)):
+            if not (np.isfinite(value) and MIN_SPEED <= value <= MAX_SPEED):
+                raise StippleError(f"--{name} must be a speed in [{MIN_SPEED:g}, {MAX_SPEED:g}] mm/s, not {value!r}")
+        if not (np.isfinite(self.lift) and 0 <= self.lift <= MAX_LIFT):
+            raise StippleError(f"--lift must be a time in [0, {MAX_LIFT:g}] s, not {self.lift!r}")
+        acceleration = self.acceleration
+        if acceleration is not None and not (
+            np.isfinite(acceleration) and MIN_SPEED <= acceleration <= MAX_ACCELERATION
+        ):
+            raise StippleError(
+                f"--acceleration must be in [{MIN_SPEED:g}, {MAX_ACCELERATION:g}] mm/s², not {acceleration!r}"
+            )
 
 
 @dataclass
