@@ -30,7 +30,8 @@ from .render.styles import DOT_STYLES
 def pen_layers(
     image, n_points, *, width, separation="gray", dot_style="circle", pen_width, dot_radius=None, order=None, **options
 ):
-    """``(name, colour, paths)`` per ink and the page height, in the document's units (CSS pixels).
+    """``(name, colour, paths)`` per ink, the page height, in the document's units (CSS pixels), and the number
+    of dots left out where they would touch.
 
     ``separation`` is a ``--palette`` value (``stipple.colour.parse_palette``); ``options`` go to
     ``stipple.colour.halftone_colour``. The default dot radius keeps the image's tone (the dots of all inks
@@ -59,7 +60,7 @@ def pen_layers(
     dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width, pen_reach=reach)
     dots = [order_dots(d, order, kept_passes(passes, d.kept)) for d, passes in zip(dots, counts, strict=True)]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
-    return drawn, rows * scale
+    return drawn, rows * scale, sum(len(points) for _, _, points in placed) - sum(len(d.centres) for d in dots)
 
 
 def kept_passes(counts, kept):
@@ -116,7 +117,13 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
             )
         check_palette_extras(options["separation"], options["black"], options["union_weight"])
         n_points = plugin_count(n_points, image, width, pen_width, options)
-        drawn, height = pen_layers(image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options)
+        drawn, height, left_out = pen_layers(
+            image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options
+        )
+        if left_out:
+            click.echo(
+                f"stipple: note: {left_out} of {n_points} dots left out where the pen's dots would touch", err=True
+            )
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     for name, colour, paths in drawn:

@@ -396,3 +396,13 @@ def test_dot_radius_with_point_dots_is_refused(tmp_path):
         main, ["torus", str(image), "-M", "50", "--dot-style", "point", "--dot-radius", "0.01mm", "-o", "p.svg"]
     )
     assert result.exit_code == 1 and "--dot-radius does not size --dot-style point" in result.output
+
+
+def test_vpype_plugin_says_how_many_dots_it_left_out(tmp_path, capsys):
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    image = flat_gray(tmp_path, 0.1, size=16)
+    document = vpype_cli.execute(f"stipple -M 3000 --dot-style point --pen-width 0.5mm -w 20mm --iterations 3 {image}")
+    drawn = sum(len(layer) for layer in document.layers.values())
+    assert f"{3000 - drawn} of 3000 dots left out" in capsys.readouterr().err
