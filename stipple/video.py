@@ -22,7 +22,6 @@ from functools import partial
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-from .colour import palette_label
 from .deformation import deform
 from .errors import StippleError
 from .halftone import (
@@ -39,7 +38,7 @@ from .manifolds import PinnedTorus
 from .sampling import pixel_indices
 from .torus import DEFAULT_EPSILON, default_bandwidth, periodic_blur, torus_problem
 from .video_inks import Inks
-from .video_keeper import FrameKeeper
+from .video_keeper import FrameKeeper, checkpoint_settings
 
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
 # left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 (and 8
@@ -197,7 +196,9 @@ def stipple_video(
     check_integer("frame iterations", settings.frame_iterations, 0, 10**6)
     if key is not None:
         identity = {**(identity or {}), "key": frame_fingerprint(np.concatenate([np.ravel(k) for k in key]))}
-    keeper = FrameKeeper(checkpoint, _defining(settings, identity), checkpoint_seconds, checkpoint_frames, resume)
+    keeper = FrameKeeper(
+        checkpoint, checkpoint_settings(settings, identity), checkpoint_seconds, checkpoint_frames, resume
+    )
     bandwidth, timings, status, position = settings.bandwidth, [], "finished", -1
     reference, free = (None, None) if key is None else (key[1], None)
     previous, before = (None, None) if key is None else key
@@ -421,27 +422,6 @@ def _run_options(settings, stop):
 
 def _placed(weights, placement):
     return weights if placement is None else placement(weights)
-
-
-def _defining(settings, identity):
-    """The settings a checkpoint must match: the problem's, the warm frames' cap, the start and the identity."""
-    init = settings.init if isinstance(settings.init, str) else "points"
-    defining = {
-        "points": settings.n_points,
-        "bandwidth": settings.bandwidth,
-        "near_field": bool(settings.near_field),
-        "hessian": settings.hessian,
-        "seed": settings.seed,
-        "init": init,
-        "frame_iterations": settings.frame_iterations,
-        "change": settings.change,
-        "free_margin": settings.free_margin,
-    }
-    if settings.palette is not None:
-        defining.update(
-            palette=palette_label(settings.palette), black=settings.black, union_weight=settings.union_weight
-        )
-    return {**defining, **(identity or {})}
 
 
 def _result(status, frames, timings, seconds, cold_first=True):

@@ -4,6 +4,7 @@ often and at the end (``stipple.video``; the file format is ``stipple.io.video``
 import os
 import time
 
+from .colour import palette_label
 from .errors import StippleError
 from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
 
@@ -60,3 +61,25 @@ class FrameKeeper:
     def save(self):
         save_video_checkpoint(self.path, self.points, self.settings, self.indices, self.fingerprints)
         self.saved = (time.monotonic(), len(self.points))
+
+
+def checkpoint_settings(settings, identity):
+    """The settings a video's checkpoint must match (``stipple.video.VideoSettings``): the problem's, the warm
+    frames' cap, the start and ``identity`` (the density's transfer, the frame selection)."""
+    init = settings.init if isinstance(settings.init, str) else "points"
+    defining = {
+        "points": settings.n_points,
+        "bandwidth": settings.bandwidth,
+        "near_field": bool(settings.near_field),
+        "hessian": settings.hessian,
+        "seed": settings.seed,
+        "init": init,
+        "frame_iterations": settings.frame_iterations,
+        "change": settings.change,
+        "free_margin": settings.free_margin,
+    }
+    if settings.palette is not None:
+        defining.update(
+            palette=palette_label(settings.palette), black=settings.black, union_weight=settings.union_weight
+        )
+    return {**defining, **(identity or {})}
