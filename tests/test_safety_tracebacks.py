@@ -174,22 +174,28 @@ def test_a_two_gigabyte_member_is_not_inflated(folder, checkpoint):
     refused([*RESUME, "--checkpoint", "bad.npz"], folder, "member points holds 2147483648 bytes")
 
 
-@pytest.mark.parametrize("command", [["torus", "in.png", *FAST], ["evaluate", "p.csv", "in.png"]])
-def test_closed_stdout_is_refused_before_the_work(folder, command):
+def refused_with_a_closed_stream(folder, command, stream, message):
+    """``stipple command`` run with file descriptor ``stream`` closed: one line, exit 1, nothing written."""
     import os
 
     before = snapshot(folder)
     result = subprocess.run(
         [sys.executable, "-m", "stipple", *command],
         cwd=folder,
+        stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
-        preexec_fn=lambda: os.close(1),
+        preexec_fn=lambda: os.close(stream),
     )
     assert result.returncode == 1
-    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
+    assert result.stderr.strip().splitlines() == [message]
     assert snapshot(folder) == before
+
+
+@pytest.mark.parametrize("command", [["torus", "in.png", *FAST], ["evaluate", "p.csv", "in.png"]])
+def test_closed_stdout_is_refused_before_the_work(folder, command):
+    refused_with_a_closed_stream(folder, command, 1, "Error: cannot write to stdout: it is closed")
 
 
 @pytest.mark.parametrize(
@@ -198,20 +204,7 @@ def test_closed_stdout_is_refused_before_the_work(folder, command):
 )
 def test_closed_stdin_is_one_line(folder, command):
     """'-' with standard input closed (``<&-``) ended in an AttributeError traceback."""
-    import os
-
-    before = snapshot(folder)
-    result = subprocess.run(
-        [sys.executable, "-m", "stipple", *command],
-        cwd=folder,
-        stdin=subprocess.DEVNULL,
-        capture_output=True,
-        text=True,
-        preexec_fn=lambda: os.close(0),
-    )
-    assert result.returncode == 1
-    assert result.stderr.strip().splitlines() == ["Error: cannot read '-' (stdin): it is closed"]
-    assert snapshot(folder) == before
+    refused_with_a_closed_stream(folder, command, 0, "Error: cannot read '-' (stdin): it is closed")
 
 
 @pytest.mark.parametrize("command", [["torus", "in.png", *FAST, "-o", "-"], ["design", "-t", "3", "-o", "d.csv"]])
