@@ -47,7 +47,7 @@ class BatchJob:
 @dataclass
 class BatchOutcome:
     """What became of one image: ``status`` "done", "skipped" (its outputs existed) or "failed"; ``message``
-    says why it failed or how its run stopped."""
+    says why it failed or how its run stopped; ``notes``, what its drawing's user must know (dots left out)."""
 
     image: str
     status: str
@@ -55,6 +55,7 @@ class BatchOutcome:
     seconds: float = 0.0
     iterations: int = 0
     energy: float = float("nan")
+    notes: tuple = ()
 
 
 def parse_formats(text):
@@ -158,6 +159,7 @@ def run_job(job):
         time.perf_counter() - started,
         int(result.iterations),
         float(result.energy),
+        tuple(getattr(outputs.files, "warnings", ())),
     )
 
 

@@ -288,3 +288,17 @@ def test_local_cluster_writes_the_same_files(images, tmp_path):
         result = run([*args, "--scheduler", cluster.scheduler_address])
         assert "0 done, 3 skipped (outputs exist), 1 failed of 4" in result.stderr
         assert mtimes(remote) == before
+
+
+def test_batch_says_which_images_left_pen_dots_out(tmp_path):
+    """Each image's drawing that left dots out says so (the SVG's comment alone did), unless --quiet."""
+    rows, columns = np.mgrid[0:30, 0:45]
+    Image.fromarray((255 * (0.05 + 0.3 * columns / 45)).astype(np.uint8)).save(tmp_path / "dark.png")
+    arguments = ["batch", str(tmp_path / "dark.png"), "-M", "3000", "--dot-style", "point", "--pen-width", "0.5mm"]
+    arguments += ["--width", "30mm", "--iterations", "5", "--format", "svg", "-d", str(tmp_path / "out")]
+    said = CliRunner().invoke(main, arguments)
+    assert said.exit_code == 0, said.output
+    (line,) = [line for line in said.output.splitlines() if "left out" in line]
+    assert line.startswith("stipple batch: ") and "dark.png: note: " in line and "of 3000 dots left out" in line
+    quiet = CliRunner().invoke(main, [*arguments, "--force", "-q"])
+    assert quiet.exit_code == 0 and "left out" not in quiet.output

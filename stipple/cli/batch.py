@@ -127,6 +127,7 @@ class BatchProgress:
 
     def __init__(self, total, options):
         self.verbose = options["verbose"] and not options["quiet"]
+        self.quiet = options["quiet"]
         self.bar = None
         if not options["quiet"] and sys.stderr.isatty():
             from tqdm import tqdm
@@ -141,6 +142,8 @@ class BatchProgress:
             self.echo(
                 f"stipple batch: {outcome.image}: {outcome.status}" + (f"; {details}" * (outcome.status == "done"))
             )
+        for note in () if self.quiet else outcome.notes:
+            self.echo(f"stipple batch: {outcome.image}: note: {note}")
         if self.bar is not None:
             self.bar.update(1)
 
