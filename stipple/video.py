@@ -49,7 +49,7 @@ FRAME_ITERATIONS = 12
 # The deformation shifts a moving object's dots as a whole, and where they meet the freed dots it leaves gaps: a
 # dark disc moving down 5 px a frame came out with white holes (its lightest pixel 0.65-0.80 for 0.05, blurred at
 # 1 px 0.16-0.21 against a cold run's 0.07). WARM_POLISH pinned iterations after the deformation, before the low
-# bandwidth's level, close them (16 + 4: 0.08-0.09) at the same cost as 16 before it.
+# bandwidth's level, close them (12 + 4: 0.08-0.10) at the same cost as 16 before it.
 WARM_POLISH = 4
 # A warm frame moves the dots within FREE_MARGIN dot spacings of a change in darkness above CHANGE (blurred at one
 # spacing, against the darkness the dots there were placed for); 8-bit noise and compression stay below it.

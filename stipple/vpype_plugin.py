@@ -24,7 +24,7 @@ from .pipelines.pen import placement_density
 from .progressive import order_dots, progressive_colour
 from .render.dots import flat_dots, least_pen_reach
 from .render.pen import dot_paths
-from .render.styles import DOT_STYLES
+from .render.styles import DOT_STYLES, check_dot_radius_style
 
 
 def pen_layers(
@@ -111,10 +111,7 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
     """Stipple IMAGE into one new layer per ink (the image's top-left corner at the origin)."""
     try:
         check_lengths(width=width, pen_width=pen_width, dot_radius=dot_radius, seed=options["seed"])
-        if dot_radius is not None and options["dot_style"] == "point":
-            raise StippleError(
-                "--dot-radius does not size --dot-style point (one short pen stroke): it would be ignored"
-            )
+        check_dot_radius_style(options["dot_style"], dot_radius)
         check_palette_extras(options["separation"], options["black"], options["union_weight"])
         n_points = plugin_count(n_points, image, width, pen_width, options)
         drawn, height, left_out = pen_layers(

@@ -302,3 +302,14 @@ def test_batch_says_which_images_left_pen_dots_out(tmp_path):
     assert line.startswith("stipple batch: ") and "dark.png: note: " in line and "of 3000 dots left out" in line
     quiet = CliRunner().invoke(main, [*arguments, "--force", "-q"])
     assert quiet.exit_code == 0 and "left out" not in quiet.output
+
+
+@pytest.mark.parametrize("transfer", [["--range", "0", "1"], ["--levels", "auto"]])
+def test_a_batch_of_images_and_maps_gives_each_its_own_transfer(tmp_path, transfer):
+    """--range is the maps', --levels the images': one input refuses the other's, a mixed batch must not."""
+    Image.fromarray(np.tile(np.linspace(0, 255, 24).astype(np.uint8), (16, 1))).save(tmp_path / "a.png")
+    np.save(tmp_path / "b.npy", np.linspace(0.0, 1.0, 16 * 24).reshape(16, 24))
+    arguments = ["batch", str(tmp_path / "a.png"), str(tmp_path / "b.npy"), *transfer, "-M", "60", "-N", "12"]
+    result = CliRunner().invoke(main, [*arguments, "--iterations", "2", "--format", "csv", "-d", str(tmp_path / "o")])
+    assert result.exit_code == 0, result.output
+    assert sorted(os.listdir(tmp_path / "o")) == ["a.csv", "b.csv"]

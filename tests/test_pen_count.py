@@ -393,7 +393,19 @@ def test_dot_radius_with_point_dots_is_refused(tmp_path):
     """A point dot's path does not depend on the radius, which only switched the no-touch rule off (277 pairs)."""
     image = flat_gray(tmp_path, 0.4)
     result = CliRunner().invoke(
-        main, ["torus", str(image), "-M", "50", "--dot-style", "point", "--dot-radius", "0.01mm", "-o", "p.svg"]
+        main,
+        [
+            "torus",
+            str(image),
+            "-M",
+            "50",
+            "--dot-style",
+            "point",
+            "--dot-radius",
+            "0.01mm",
+            "-o",
+            str(tmp_path / "p.svg"),
+        ],
     )
     assert result.exit_code == 1 and "--dot-radius does not size --dot-style point" in result.output
 

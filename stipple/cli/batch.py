@@ -4,6 +4,7 @@ import copy
 import os
 import sys
 import time
+from dataclasses import replace
 
 import click
 
@@ -106,6 +107,8 @@ def plan(inputs, options):
     if options["scheduler"] is not None:
         scheduler_address(options["scheduler"])
     recipe = torus_recipe(options)
+    # A folder may mix images and .npy maps: --range is the maps', --levels the images'.
+    recipe = replace(recipe, load={**recipe.load, "strict": False})
     check_recipe(recipe)
     out_dir = options["out_dir"]
     jobs = plan_batch(expand_images(inputs), out_dir, formats, recipe)

@@ -198,8 +198,16 @@ def refuse_foreign_options(kind):
         if name not in applies and context.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
     ]
     if given:
-        flags = [next(p.opts[-1] for p in context.command.params if p.name == name) for name in given]
+        flags = [_flag(context, name) for name in given]
         raise click.ClickException(f"{', '.join(flags)}: not for {KINDS[kind]}; it would be ignored")
+
+
+def _flag(context, name):
+    """The option ``name`` as given: a boolean flag's off switch (``--gray``) when it is off, else its first name."""
+    (option,) = [param for param in context.command.params if param.name == name]
+    if option.secondary_opts and context.params[name] is False:
+        return option.secondary_opts[0]
+    return option.opts[0]
 
 
 def check_builtin(input_source):

@@ -5,7 +5,7 @@ import math
 import click
 
 from ..errors import StippleError
-from ..render.styles import DOT_STYLES, STYLES
+from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
 
@@ -171,7 +171,8 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
             default=1e-4,
             show_default=True,
             help="Stop when the gradient norm falls to this fraction of the initial one (for the torus's stratified "
-            "start: of the one at i.i.d. density samples; spherical designs, sphere --uniform: 1e-6 unless given).",
+            "start: of the one at i.i.d. density samples; sphere --uniform, whose kernel has a design term: 1e-6 "
+            "unless given).",
         ),
         click.option("--safeguard", is_flag=True, help="Halve CG steps that would raise the energy."),
         click.option(
@@ -393,9 +394,7 @@ def dot_radius(options):
 
     if options["dot_radius"] is None:
         return None
-    if options.get("dot_style") == "point":
-        # A point dot is one short pen stroke: the radius would not size it, only let the dots touch.
-        raise StippleError("--dot-radius does not size --dot-style point (one short pen stroke): it would be ignored")
+    check_dot_radius_style(options.get("dot_style"), options["dot_radius"])
     radius, width = parse_length(options["dot_radius"], "dot-radius"), parse_length(options["width"], "width")
     if radius[0] * UNITS[radius[1]] > 0.5 * width[0] * UNITS[width[1]]:
         raise StippleError(

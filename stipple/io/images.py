@@ -167,7 +167,7 @@ def rescale(values, value_range=None, name="input"):
     return np.clip((values / 2 - low / 2) / span, 0.0, 1.0)
 
 
-def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=None, name=None):
+def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=None, name=None, strict=True):
     """Density ``w`` on a grid (row 0 = top/north) from an image or a ``.npy`` map.
 
     Parameters
@@ -183,6 +183,9 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
     levels : "auto" or (float, float), optional
         Images: the gray values ``(black, white)`` in [0, 1] stretched to black and white before the above
         (a levels adjustment); "auto": the image's 0.5th and 99.5th percentiles. Default: none.
+    strict : bool
+        Refuse ``value_range`` for an image and ``levels`` for a map (one input: they would be ignored); False
+        lets a batch of images and maps give each its own (``stipple batch``).
 
     Returns
     -------
@@ -197,11 +200,11 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
     if not data:
         raise StippleError(f"{name}: file is empty")
     if data.startswith(NPY_MAGIC):
-        if levels is not None:
+        if levels is not None and strict:
             raise StippleError(f"{name}: --levels is for images; a .npy map is stretched by --range")
         values = rescale(check_grid(load_array(data, name), name), value_range, name)
     else:
-        if value_range is not None:
+        if value_range is not None and strict:
             raise StippleError(f"{name}: --range is for .npy maps; an image's gray values are stretched by --levels")
         gray = check_grid(load_gray(data, name), name)
         values = 1.0 - stretch_levels(gray, levels)
@@ -250,7 +253,7 @@ def check_levels(levels):
     return black, white
 
 
-def check_load_options(*, invert=False, gamma=1.0, value_range=None, levels=None):
+def check_load_options(*, invert=False, gamma=1.0, value_range=None, levels=None, strict=True):
     """Raise if a setting of ``load_density`` is out of range (checked before any file is read)."""
     _check_gamma(gamma)
     if value_range is not None:

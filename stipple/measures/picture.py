@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from PIL import Image
+from scipy import sparse
 from scipy.ndimage import gaussian_filter
 
 from ..io.images import LUMA
@@ -89,15 +90,9 @@ def on_grid(picture, shape, inset=0.0):
     rows, columns = shape
     if np.shape(picture)[:2] == (rows, columns) and inset == 0:
         return np.clip(np.asarray(picture, dtype=np.float64), 0.0, 1.0)
-    picture = np.asarray(picture, dtype=np.float32)
-    channels = [picture] if picture.ndim == 2 else [picture[..., k] for k in range(picture.shape[2])]
     if not 0 <= inset < min(rows, columns) / 2:
         raise ValueError(f"inset must be in [0, {min(rows, columns) / 2:g}) input pixels, not {inset}")
-    sx, sy = picture.shape[1] / columns, picture.shape[0] / rows
-    box = (inset * sx, inset * sy, (columns - inset) * sx, (rows - inset) * sy)
-    resized = [Image.fromarray(c, "F").resize((columns, rows), Image.Resampling.BOX, box=box) for c in channels]
-    values = np.clip(np.stack([np.asarray(r, dtype=np.float64) for r in resized], axis=-1), 0.0, 1.0)
-    return values[..., 0] if picture.ndim == 2 else values
+    return area_average(picture, shape, (inset / rows, inset / columns))
 
 
 def luminance(rgb):
@@ -241,21 +236,31 @@ def floyd_steinberg(reference, count):
     return area_average(np.asarray(dithered, dtype=np.float64) / 255.0, np.shape(reference)[:2]), dots
 
 
-def area_average(picture, shape):
+def area_average(picture, shape, inset=(0.0, 0.0)):
     """``picture`` (``(h, w)`` or ``(h, w, channels)``) stretched over a grid of ``shape = (rows, columns)``, each
-    grid cell the exact area average of the picture's pixels over it (any ratio of sizes)."""
-    rows_weights = _overlaps(shape[0], picture.shape[0])
-    columns_weights = _overlaps(shape[1], picture.shape[1])
-    averaged = np.tensordot(np.tensordot(rows_weights, picture, axes=(1, 0)), columns_weights, axes=(1, 1))
-    return np.clip(np.moveaxis(averaged, -1, 1), 0.0, 1.0)
+    grid cell the exact area average of the picture's pixels over it, at any ratio of sizes; ``inset``, the
+    shares ``(of the height, of the width)`` cut off each side of the picture first."""
+    picture = np.asarray(picture, dtype=np.float64)
+    rows_weights = _overlaps(shape[0], picture.shape[0], inset[0])
+    columns_weights = _overlaps(shape[1], picture.shape[1], inset[1])
+    channels = [picture] if picture.ndim == 2 else [picture[..., k] for k in range(picture.shape[2])]
+    averaged = [np.asarray((columns_weights @ (rows_weights @ channel).T).T) for channel in channels]
+    return np.clip(averaged[0] if picture.ndim == 2 else np.stack(averaged, axis=-1), 0.0, 1.0)
 
 
-def _overlaps(cells, pixels):
-    """``(cells, pixels)``: the share of each of ``cells`` equal cells of [0, 1] that each of ``pixels`` covers."""
-    cell_edges, pixel_edges = np.linspace(0, 1, cells + 1), np.linspace(0, 1, pixels + 1)
-    low = np.maximum(cell_edges[:-1, None], pixel_edges[None, :-1])
-    high = np.minimum(cell_edges[1:, None], pixel_edges[None, 1:])
-    return np.clip(high - low, 0.0, None) * cells
+def _overlaps(cells, pixels, inset=0.0):
+    """Sparse ``(cells, pixels)``: the share of each of ``cells`` equal cells of ``[inset, 1 - inset]`` that each of
+    ``pixels`` equal pixels of ``[0, 1]`` covers (a cell overlaps a few neighbouring pixels only)."""
+    cell_edges, pixel_edges = np.linspace(inset, 1 - inset, cells + 1), np.linspace(0, 1, pixels + 1)
+    first = np.clip(np.searchsorted(pixel_edges, cell_edges[:-1], side="right") - 1, 0, pixels - 1)
+    last = np.clip(np.searchsorted(pixel_edges, cell_edges[1:], side="left") - 1, 0, pixels - 1)
+    counts = last - first + 1
+    row = np.repeat(np.arange(cells), counts)
+    column = np.concatenate([np.arange(a, b + 1) for a, b in zip(first, last, strict=True)])
+    low = np.maximum(cell_edges[:-1][row], pixel_edges[column])
+    high = np.minimum(cell_edges[1:][row], pixel_edges[column + 1])
+    share = np.clip(high - low, 0.0, None) / (cell_edges[1] - cell_edges[0])
+    return sparse.csr_matrix((share, (row, column)), shape=(cells, pixels))
 
 
 def _dither_black(image):

@@ -134,8 +134,7 @@ def auto_count(darkness, paper_width, style, pen_width):
     reachable = reachable_tone(style, pen_width)
     tone_points = int(round(ink / area))
     packing_points = packing_count(style, pen_width, paper)
-    # The ink the pen carries: tones beyond its reach drawn at it (placed by ``pen_density``, the same clip).
-    count = min(int(round(float(np.minimum(darkness, reachable).mean()) * paper / area)), packing_points)
+    count = carried_count(darkness, reachable, paper, area, packing_points)
     if count < 1:
         raise StippleError(
             f"-M auto: the image's ink ({ink:.3g} mm²) is less than one pen dot ({area:.3g} mm²); give -M"
@@ -147,6 +146,12 @@ def auto_count(darkness, paper_width, style, pen_width):
         )
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
     return PenCount(count, tone_points, packing_points, area, ink, paper, float(reachable), darkest)
+
+
+def carried_count(darkness, reachable, paper, area, packing):
+    """The dots of pen dot ``area`` (mm²) that carry the ink the pen can lay on ``paper`` mm² (tones beyond
+    ``reachable`` drawn at it, as ``pen_density`` places them), at most ``packing``: ``-M auto``'s count."""
+    return min(int(round(float(np.minimum(darkness, reachable).mean()) * paper / area)), packing)
 
 
 def pen_density(darkness, n_points, paper_width, style, pen_width):
@@ -202,13 +207,12 @@ def given_count_notes(darkness, n_points, draw):
         paper = paper_area(paper_width, darkness.shape)
         area, _ = pen_dot(style, pen_width)
         packing = packing_count(style, pen_width, paper)
-        # The dots that carry the ink the pen can lay down (tones beyond its reach drawn at it), as -M auto counts.
-        carried = min(float(np.minimum(darkness, reachable_tone(style, pen_width)).mean()) * paper / area, packing)
+        carried = carried_count(darkness, reachable_tone(style, pen_width), paper, area, packing)
         if n_points < LIGHT_SHARE * carried:
             lines.append(
                 f"{n_points} point dots of a {pen_width:g} mm pen ink {n_points * area / paper:.0%} of the paper for "
                 f"the image's {darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that "
-                f"carry its ink, {int(round(carried))})"
+                f"carry its ink, {carried})"
             )
         if n_points > packing:
             lines.append(
