@@ -508,3 +508,10 @@ def test_a_dark_disc_moving_through_its_dots_leaves_no_holes():
         inside = (columns - x) ** 2 + (rows - y) ** 2 <= 11**2
         lightest.append(gaussian_filter(np.asarray(picture) / 255, 1.0)[inside].max())
     assert max(lightest[1:]) <= 1.5 * lightest[0], lightest
+
+
+def test_range_is_refused_for_a_video(tmp_path):
+    """A video's frames are images: --range (the .npy maps') was accepted and ignored."""
+    source = frames_folder(tmp_path / "in", moving_disc(2))
+    result = video(source, "-M", COUNT, "--range", "0", "1", "-o", tmp_path / "d.csv")
+    assert result.exit_code == 1 and "--range is for .npy maps" in result.output

@@ -88,6 +88,8 @@ def video(ctx, source, **options):
             from .recipes import check_colour_options
 
             check_colour_options(options)
+        if options["value_range"] is not None:
+            raise StippleError("--range is for .npy maps; a video's frames are images (their gray values: --levels)")
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
