@@ -418,3 +418,42 @@ def test_vpype_plugin_says_how_many_dots_it_left_out(tmp_path, capsys):
     document = vpype_cli.execute(f"stipple -M 3000 --dot-style point --pen-width 0.5mm -w 20mm --iterations 3 {image}")
     drawn = sum(len(layer) for layer in document.layers.values())
     assert f"{3000 - drawn} of 3000 dots left out" in capsys.readouterr().err
+
+
+def test_a_sphere_maps_pen_dots_are_placed_by_the_clipped_map(tmp_path):
+    """The sphere's pen dots were placed by the unclipped map: the topography at M = 5000 with a 0.5 mm pen, 100 mm
+    wide, left 556 dots out of the equirectangular map. Clipped as an image's darkness is, none."""
+    from stipple.pipelines.pen import sphere_pen_density
+    from stipple.render.dots import sphere_per_radian
+    from stipple.sphere_density import CellMap
+
+    rows, columns = np.mgrid[0:45, 0:90]
+    peaks = 0.05 + np.exp(-(((rows - 15) ** 2 + (columns - 30) ** 2) / 30.0))
+    density = CellMap(peaks)
+    draw = {"dot_style": "circle", "dot_radius": None, "style": "plotter", "width": (100.0, "mm")}
+    draw["pen_width"] = (0.5, "mm")
+    clipped = sphere_pen_density(density, 1500, draw, "equirect")
+    mean = np.average(clipped.values, weights=clipped.cell_areas)
+    area = np.pi * 0.5**2
+    allowed = reachable_tone("circle") * 4 * np.pi * sphere_per_radian("equirect", 100.0) ** 2 / (1500 * area)
+    assert clipped.values.max() == pytest.approx(allowed * mean, rel=1e-6)
+    low = peaks < clipped.values.max()
+    assert np.array_equal(clipped.values[low], peaks[low])
+    np.save(tmp_path / "peaks.npy", peaks)
+    options = ["--dot-style", "circle", "--pen-width", "0.5mm", "--width", "100mm", "--projection", "equirect"]
+    result = CliRunner().invoke(
+        main,
+        [
+            "sphere",
+            str(tmp_path / "peaks.npy"),
+            "-M",
+            "1500",
+            "--iterations",
+            "40",
+            *options,
+            "-o",
+            str(tmp_path / "s.svg"),
+        ],
+    )
+    assert result.exit_code == 0 and "left out" not in result.output, result.output
+    assert (tmp_path / "s.svg").read_text().count("<path ") == 1500

@@ -58,6 +58,7 @@ def sphere(ctx, map_source, **options):
     from ..io.png import check_png_outputs
     from ..pipelines.inputs import read_sphere_init
     from ..pipelines.outputs import sphere_files
+    from ..pipelines.pen import sphere_pen_density
     from ..render.dots import sphere_canvas
     from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
 
@@ -80,6 +81,7 @@ def sphere(ctx, map_source, **options):
                 lon0=lon0,
             )
             warn_aspect(density, map_source, options)
+            density = sphere_pen_density(density, options["n_points"], settings, options["projection"])
             problem = sphere_problem(
                 density,
                 options["n_points"],

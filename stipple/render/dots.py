@@ -285,6 +285,14 @@ def sphere_canvas(projection):
 GLOBE = 0.98  # the globe's radius over half the canvas
 
 
+def sphere_per_radian(projection, width=None):
+    """A sphere picture's length per radian of the sphere (the map's along a meridian, the globe's at its
+    centre): in user units, or, given the picture's ``width`` (any unit), in that unit."""
+    canvas_width = sphere_canvas(projection)[0]
+    per_radian = canvas_width / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
+    return per_radian if width is None else per_radian * width / canvas_width
+
+
 def orthographic(points, view):
     """Canvas positions (``ORTHO_SIZE`` square, y down) of unit vectors seen from ``view``, and their depth
     (cosine of the angle from the view's centre; positive on the visible side)."""

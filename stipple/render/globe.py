@@ -19,6 +19,7 @@ from .dots import (
     orthographic,
     projected_darkness,
     sphere_canvas,
+    sphere_per_radian,
     thin_dots,
     tone_dots,
 )
@@ -61,7 +62,7 @@ def sphere_drawing(
     if style == "tone" and darkness_at is not None and fixed is None and dot_style == "disc":
         drawn, notes = _tone_sphere(points, lon_lat, projection, view, color, darkness_at)
         return _sphere_picture([drawn], canvas, projection, width, png_width, background, pen, notes)
-    per_radian = canvas[0] / (2 * np.pi) if projection == "equirect" else GLOBE * ORTHO_SIZE / 2
+    per_radian = sphere_per_radian(projection)
     tone = 2 * np.sqrt((0.5 if ink is None else ink) / max(len(points), 1))
     warnings = []
     angles = (
@@ -86,10 +87,11 @@ def sphere_drawing(
         # Foreshortening brings dots near the limb closer (and the map's inset those at its edges), but not the
         # pen's width: the pen's dots are kept apart on the drawing itself (thinned, and each dot's radius capped
         # by its drawn nearest distance).
+        shown = len(drawn.centres)  # the globe's visible side, the map's every dot
         drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
         drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
         if left_out:
-            warnings = [f"{left_out} of {len(points)} dots left out where the pen's dots would touch"]
+            warnings = [f"{left_out} of the {shown} dots shown left out where the pen's dots would touch"]
     layers = with_pen_paths([drawn], dot_style, pen)
     return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings)
 

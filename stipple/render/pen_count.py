@@ -164,17 +164,28 @@ def pen_density(darkness, n_points, paper_width, style, pen_width):
     irregularly: a dark photo's darkest tenth came out 0.35 dark, against the 0.56 that the packing reaches."""
     darkness = np.asarray(darkness, dtype=np.float64)
     area, _ = pen_dot(style, pen_width)
-    allowed = reachable_tone(style) * paper_area(paper_width, darkness.shape) / (n_points * area)
-    mean = darkness.mean()
-    if mean <= 0 or darkness.max() <= allowed * mean:
+    return clipped_density(
+        darkness, reachable_tone(style) * paper_area(paper_width, darkness.shape) / (n_points * area)
+    )
+
+
+def clipped_density(darkness, allowed, cell_areas=None):
+    """``darkness`` clipped at the level ``c`` with ``c / mean(min(w, c)) = allowed`` (means weighted by
+    ``cell_areas``, default equal): the densest dots at ``allowed`` times the mean density (``pen_density``;
+    the sphere's cells, ``stipple.pipelines.pen.sphere_pen_density``). Unchanged where it is nowhere that dense."""
+
+    def mean(values):
+        return float(np.average(values, weights=cell_areas))
+
+    if mean(darkness) <= 0 or darkness.max() <= allowed * mean(darkness):
         return darkness
     # Bisection of c / mean(min(w, c)) = allowed; as c falls the clip tends to an even density over the inked
-    # pixels, whose ratio (1 / their share) no fewer dots can go below.
-    target = max(allowed, 1.0 / np.mean(darkness > 0))
+    # cells, whose ratio (1 / their share) no fewer dots can go below.
+    target = max(allowed, 1.0 / mean(darkness > 0))
     low, high = 0.0, float(darkness.max())
     for _ in range(60):
         level = 0.5 * (low + high)
-        if level > target * np.minimum(darkness, level).mean():
+        if level > target * mean(np.minimum(darkness, level)):
             high = level
         else:
             low = level
