@@ -192,6 +192,20 @@ def test_periodic_tone_dots_draw_each_dot_across_the_edges_where_the_picture_wan
     assert not np.any(np.all(np.isclose(bar.copies[0], stray), axis=1))
 
 
+def test_a_light_gray_edge_across_from_a_dark_one_keeps_its_dots_and_copies(blue_noise):
+    """Only near white are copies left out: on a light gray page (0.05) with a dark bar (0.7) along the left edge,
+    a dot just left of the right edge was drawn across the edge in the bar, and the bar's copies left out of the
+    gray, both counted by the radii where they were placed: the gray's outermost pixels came out 25 % too light."""
+    size = (48.0, 48.0)
+    coverage = np.full((48, 48), 0.05)
+    coverage[:, :5] = 0.7
+    edge = np.array([[47.9, 24.0]])
+    (dots,) = periodic_tone_dots([("dots", (0, 0, 0), np.vstack([blue_noise * size, edge]))], size, [coverage])
+    assert np.allclose(dots.centres[-1], edge)  # drawn where it was placed
+    crossing = dots.centres[:, 0] < dots.radii  # the bar's discs across the left edge: drawn in the gray too
+    assert crossing.any() and np.sum(dots.copies[0][:, 0] > size[0] / 2) >= crossing.sum()
+
+
 def test_a_small_dark_mark_on_a_light_page_is_drawn_dark(rng):
     """A 6-pixel mark of darkness 0.95 on a page of 0.03: its dots are 30 times as dense as the page's, and a grid
     of the average's pixels per dot measured them a pixel each (its core came out 0.83 dark)."""
