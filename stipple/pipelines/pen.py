@@ -54,10 +54,16 @@ def placement_density(weights, n_points, draw):
     pen dots in the plotter style (whose dots must never touch) the same clipped where the dots would pack closer
     than the pen allows (``stipple.render.pen_count.pen_density``); also the ink the drawing's dots carry (a
     filled dot's radius), in the run's drawing and in ``stipple render --like``."""
-    if draw.get("dot_style") not in PEN_STYLES or draw.get("dot_radius") is not None or draw.get("style") != "plotter":
+    if not clipped_for_the_pen(draw):
         return weights
     paper, pen = paper_and_pen(draw)
     return pen_density(weights, n_points, paper, draw["dot_style"], pen)
+
+
+def clipped_for_the_pen(draw):
+    """Whether the drawing ``draw`` (the render settings) places its dots by a density clipped for the pen: pen
+    dots in the plotter style, at the radius that keeps them apart (not a fixed ``dot_radius``)."""
+    return draw.get("dot_style") in PEN_STYLES and draw.get("dot_radius") is None and draw.get("style") == "plotter"
 
 
 def sphere_pen_density(density, n_points, draw, projection):
@@ -70,9 +76,7 @@ def sphere_pen_density(density, n_points, draw, projection):
     from ..render.dots import sphere_per_radian
     from ..sphere_density import CellMap
 
-    if draw.get("dot_style") not in PEN_STYLES or draw.get("dot_radius") is not None or draw.get("style") != "plotter":
-        return density
-    if not isinstance(density, CellMap):
+    if not clipped_for_the_pen(draw) or not isinstance(density, CellMap):
         return density
     paper_width, pen_width = paper_and_pen(draw)
     per_radian = sphere_per_radian(projection, paper_width)
