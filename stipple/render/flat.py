@@ -125,8 +125,9 @@ def tone_stroke(pixels, shape, ink, passes=STROKE_PASSES):
     ``ink W H / length`` to start with, then scaled ``passes`` times by ``ink`` over the ink the line drawn with it
     lays down (``render_line`` at twice the image's width, at most ``STROKE_PICTURE_WIDTH``), which is less where
     the stroke crosses or touches itself. The line's length per area follows the density, so the drawn tone
-    follows it too, to where strokes touch (at density 1). A 1-pixel stroke drew the 3:1 panorama of the held-out sweep at mean 0.29 too light
-    (darkest tenth 0.51 for 0.06); the first estimate alone drew a 2:1 photo 0.017 too light, a dark one 0.031."""
+    follows it too, to where strokes touch (at density 1). A 1-pixel stroke drew the 3:1 panorama of the held-out
+    sweep at mean 0.29 too light (darkest tenth 0.51 for 0.06); the first estimate alone drew a 2:1 photo 0.017
+    too light, a dark one 0.031."""
     rows, columns = shape
     length = closed_length(pixels)
     if not length > 0:
