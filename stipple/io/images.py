@@ -8,7 +8,7 @@ import numpy as np
 from PIL import Image, ImageOps, UnidentifiedImageError
 
 from ..errors import StippleError
-from .sources import read_source, stdin_stream
+from .sources import read_source, source_or_stdin
 
 NPY_MAGIC = b"\x93NUMPY"
 MAX_NPY_HEADER = 10_000
@@ -303,7 +303,7 @@ def load_colour(source, name=None):
     Gray images give three equal channels; EXIF orientation is applied and Pillow's decompression-bomb guard
     stays on, as for ``load_density``. ``.npy`` arrays are refused (colour needs an image).
     """
-    source = stdin_stream() if source == "-" else source
+    source = source_or_stdin(source)
     name = name or str(getattr(source, "name", source))
     data = read_source(source)
     if not data:
@@ -334,4 +334,4 @@ def image_colour(image, name="input"):
 
 def load_input(source, **options):
     """``load_density`` of a path, or of stdin when ``source`` is ``-``."""
-    return load_density(stdin_stream() if source == "-" else source, **options)
+    return load_density(source_or_stdin(source), **options)

@@ -7,7 +7,7 @@ import shlex
 import numpy as np
 
 from ..errors import StippleError
-from .sources import STDIN_NAME, read_source, stdin_stream
+from .sources import STDIN_NAME, read_source, source_or_stdin
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
@@ -71,7 +71,7 @@ def read_table(source, max_rows, labels=False):
     ``(kind, points, names)``.
     """
     name = STDIN_NAME if source == "-" else source
-    data = read_source(stdin_stream() if source == "-" else source)
+    data = read_source(source_or_stdin(source))
     first_line = data.split(b"\n", 1)[0].decode("utf-8-sig", errors="replace")
     columns = {column.strip().lower() for column in first_line.split(",")}
 

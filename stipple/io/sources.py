@@ -27,6 +27,11 @@ def stdin_stream():
     return copy
 
 
+def source_or_stdin(source):
+    """``source`` as read: a path or stream, or stdin's copy (``stdin_stream``) when it is ``-``."""
+    return stdin_stream() if source == "-" else source
+
+
 def read_source(source, limit=None):
     """Bytes of ``source`` (a path, or a binary file object such as stdin), at most ``limit`` of them
     (default ``MAX_INPUT_BYTES``).

@@ -9,7 +9,7 @@ import numpy as np
 from ..colour import check_layer_names, parse_palette, separate
 from ..errors import StippleError
 from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
-from ..io.sources import STDIN_NAME, read_source, stdin_stream
+from ..io.sources import STDIN_NAME, read_source, source_or_stdin
 from ..line.problem import line_problem
 from ..multiclass import class_bandwidth
 from ..render.pen import closed_length
@@ -176,7 +176,7 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
     diffusion with about that many dots.
     """
     drawn = load_colour(picture_source, name=str(picture_source))
-    data = read_source(stdin_stream() if input_source == "-" else input_source)
+    data = read_source(source_or_stdin(input_source))
     name = STDIN_NAME if input_source == "-" else str(input_source)
     if colour is None:
         colour = not data.startswith(NPY_MAGIC) and mean_chroma(load_colour(io.BytesIO(data), name)) > GRAY_CHROMA
