@@ -101,13 +101,13 @@ def evaluate(
         "palette": palette,
         "black": black,
     }
-    if str(points_source).lower().endswith(".svg"):
-        refuse_foreign_options("drawing")
+    kind = {".svg": "drawing", ".png": "picture"}.get(str(points_source).lower()[-4:], "points")
+    refuse_foreign_options(kind)
+    if kind == "drawing":
         evaluate_plot(points_source, input_source, json_path, plotter)
         return
-    refuse_foreign_options("picture" if str(points_source).lower().endswith(".png") else "points")
     separation_given = palette != "cmyk" or black != 1.0
-    if str(points_source).lower().endswith(".png"):
+    if kind == "picture":
         if separation_given:
             raise click.ClickException(
                 "--palette and --black are for layered CSVs (points), not for a drawn PICTURE.png"
@@ -224,17 +224,13 @@ def check_builtin(input_source):
 def check_transfer_applies(points_source, domain, names, options):
     """Refuse the density's transfer options where they would be ignored: a layered CSV is measured against the
     colour image's inks (none of them apply), sphere maps have no --levels."""
-    given = {
-        "--invert": bool(options["invert"]),
-        "--gamma": options["gamma"] != 1.0,
-        "--range": options["value_range"] is not None,
-        "--levels": options.get("levels") is not None,
-    }
+    from ..measures.reports import given_transfer
+
+    given = given_transfer(options)
     if names is not None:
-        named = [name for name, present in given.items() if present]
-        if named:
-            raise StippleError(f"{points_source}: {', '.join(named)}: not for layered CSVs (measured by their inks)")
-    elif domain == "sphere" and given["--levels"]:
+        if given:
+            raise StippleError(f"{points_source}: {', '.join(given)}: not for layered CSVs (measured by their inks)")
+    elif domain == "sphere" and "--levels" in given:
         raise StippleError(f"{points_source}: --levels is for images, not for sphere points")
     sphere_only = {"--uniform": options["uniform"], "--lon0": options["lon0"] != 0.0, "--kernel": options["kernel"]}
     named = [name for name, present in sphere_only.items() if present]

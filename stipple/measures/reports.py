@@ -163,7 +163,13 @@ def _check_sigmas(sigmas, shape):
 
 
 # The density's transfer options, as the command line names them, and their keywords here.
-TRANSFER_FLAGS = (("--invert", "invert"), ("--gamma", "gamma"), ("--levels", "levels"), ("--range", "value_range"))
+TRANSFER_FLAGS = (("--invert", "invert"), ("--gamma", "gamma"), ("--range", "value_range"), ("--levels", "levels"))
+
+
+def given_transfer(options):
+    """The transfer options ``options`` sets away from doing nothing (``--invert`` on, ``--gamma`` not 1, a
+    ``--range`` or ``--levels``), as the command line names them."""
+    return [flag for flag, key in TRANSFER_FLAGS if options.get(key) not in (None, False, 1.0)]
 
 
 def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
@@ -181,7 +187,7 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
     if colour is None:
         colour = not data.startswith(NPY_MAGIC) and mean_chroma(load_colour(io.BytesIO(data), name)) > GRAY_CHROMA
     if colour:
-        given = [flag for flag, value in TRANSFER_FLAGS if options.get(value) not in (None, False, 1.0)]
+        given = given_transfer(options)
         if given:
             raise StippleError(
                 f"{', '.join(given)}: for gray measures; a colour picture is measured against the image's colours "
