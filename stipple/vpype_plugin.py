@@ -22,7 +22,7 @@ from .multiclass import class_slices
 from .pipelines.colour import ink_layers
 from .pipelines.pen import placement_density
 from .progressive import order_dots, progressive_colour
-from .render.dots import flat_dots, least_pen_reach
+from .render.dots import flat_dots, least_pen_reach, left_out_note
 from .render.pen import dot_paths
 from .render.styles import DOT_STYLES, check_dot_radius_style
 
@@ -118,9 +118,7 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
             image, n_points, width=width, pen_width=pen_width, dot_radius=dot_radius, **options
         )
         if left_out:
-            click.echo(
-                f"stipple: note: {left_out} of {n_points} dots left out where the pen's dots would touch", err=True
-            )
+            click.echo(f"stipple: note: {left_out_note(left_out, f'{n_points} dots')}", err=True)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     for name, colour, paths in drawn:

@@ -7,15 +7,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..render.pen import pen_order, physical_centres
-from ..render.pen_count import (
-    PEN_STYLES,
-    auto_count,
-    clipped_density,
-    paper_and_pen,
-    pen_density,
-    pen_dot,
-    reachable_tone,
-)
+from ..render.pen_count import PEN_STYLES, auto_count, clipped_density, packing_ratio, paper_and_pen, pen_density
 
 ORDERS = ("path", "progressive")
 
@@ -79,9 +71,8 @@ def sphere_pen_density(density, n_points, draw, projection):
     if not clipped_for_the_pen(draw) or not isinstance(density, CellMap):
         return density
     paper_width, pen_width = paper_and_pen(draw)
-    per_radian = sphere_per_radian(projection, paper_width)
-    area, _ = pen_dot(draw["dot_style"], pen_width)
-    allowed = reachable_tone(draw["dot_style"]) * 4 * np.pi * per_radian**2 / (n_points * area)
+    sphere_paper = 4 * np.pi * sphere_per_radian(projection, paper_width) ** 2  # mm² at the drawing's scale
+    allowed = packing_ratio(draw["dot_style"], pen_width, sphere_paper, n_points)
     values = clipped_density(density.values, allowed, density.cell_areas)
     return density if values is density.values else CellMap(values, density.lon0)
 

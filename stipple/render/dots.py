@@ -102,6 +102,12 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, pen_reach=N
     return layers
 
 
+def left_out_note(left_out, of, where=""):
+    """The line that says ``left_out`` dots of ``of`` ("6000 dots", "the 2725 dots shown") were left out of a pen
+    drawing where they would touch (``thin_apart``), ``where`` saying where."""
+    return f"{left_out} of {of} left out where the pen's dots would touch{where}"
+
+
 def least_pen_reach(dot_style, pen):
     """How far the smallest pen dot of ``dot_style`` inks from its centre, for a pen ``pen`` wide (the paths of
     ``stipple.render.pen.dot_paths``): a "point" is a stroke a tenth of the pen long, half the pen around it (0.6

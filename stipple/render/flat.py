@@ -5,7 +5,7 @@ import numpy as np
 
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
-from .dots import flat_dots, home_positions, ink_radius, least_pen_reach, squash_paths, tone_dots
+from .dots import flat_dots, home_positions, ink_radius, least_pen_reach, left_out_note, squash_paths, tone_dots
 from .drawing import Drawing
 from .pen import closed_length, dot_paths
 
@@ -74,7 +74,7 @@ def layered_drawing(
         notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
         left_out = count - sum(len(dots.centres) for dots in drawn)
         if left_out:
-            warnings.append(f"{left_out} of {count} dots left out where the pen's dots would touch (the darkest tones)")
+            warnings.append(left_out_note(left_out, f"{count} dots", " (the darkest tones)"))
     return Drawing(
         (columns, rows),
         width,

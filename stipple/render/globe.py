@@ -15,6 +15,7 @@ from .dots import (
     globe_dots,
     inset,
     least_pen_reach,
+    left_out_note,
     nearest_distances,
     orthographic,
     projected_darkness,
@@ -91,7 +92,7 @@ def sphere_drawing(
         drawn, left_out = thin_dots(drawn, least_pen_reach(dot_style, stroke) / TOUCH_FRACTION)
         drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
         if left_out:
-            warnings = [f"{left_out} of the {shown} dots shown left out where the pen's dots would touch"]
+            warnings = [left_out_note(left_out, f"the {shown} dots shown")]
     layers = with_pen_paths([drawn], dot_style, pen)
     return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings)
 

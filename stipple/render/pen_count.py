@@ -163,10 +163,14 @@ def pen_density(darkness, n_points, paper_width, style, pen_width):
     closer than a pen dot allows, which the drawing had to leave out (``stipple.render.dots.thin_apart``),
     irregularly: a dark photo's darkest tenth came out 0.35 dark, against the 0.56 that the packing reaches."""
     darkness = np.asarray(darkness, dtype=np.float64)
-    area, _ = pen_dot(style, pen_width)
-    return clipped_density(
-        darkness, reachable_tone(style) * paper_area(paper_width, darkness.shape) / (n_points * area)
-    )
+    paper = paper_area(paper_width, darkness.shape)
+    return clipped_density(darkness, packing_ratio(style, pen_width, paper, n_points))
+
+
+def packing_ratio(style, pen_width, paper, n_points):
+    """How much denser than on average ``n_points`` pen dots of ``style`` may pack on ``paper`` mm² without
+    touching: ``reachable_tone * paper / (M a)``."""
+    return reachable_tone(style) * paper / (n_points * pen_dot(style, pen_width)[0])
 
 
 def clipped_density(darkness, allowed, cell_areas=None):
