@@ -185,16 +185,16 @@ def design_outcome(result, target, accurate=None):
     ``accurate``, ``accurate_check``'s discrepancy, if given)."""
     if accurate is not None:
         accurate.set_points(result.points)
-        loose = largest_error(accurate)
-        if loose > target.error >= target.largest:
-            target.largest = loose
+        reached = target.reached
+        target.largest = largest_error(accurate)
+        if reached and not target.reached:
             result.status = "stalled"
             result.message = (
-                f"the transforms' accuracy (epsilon) is too loose for the target: largest error {loose:.3g} > "
-                f"target {target.error:g}, measured at {DESIGN_EPSILON:g} after {result.iterations} iterations"
+                f"the transforms' accuracy (epsilon) is too loose for the target: largest error "
+                f"{target.largest:.3g} > target {target.error:g}, measured at {DESIGN_EPSILON:g} after "
+                f"{result.iterations} iterations"
             )
             return result
-        target.largest = loose
     if target.reached:
         result.status = "converged"
         result.message = f"largest error {target.largest:.3g} <= {target.error:g} after {result.iterations} iterations"
