@@ -6,6 +6,7 @@ in [0, 1)² on the torus and ``(M, 3)`` unit vectors on the sphere; tangent vect
 
 import numpy as np
 
+from .parallel import map_blocks, sum_blocks
 from .sampling import pixel_indices, wrap_unit
 
 
@@ -126,23 +127,29 @@ class PinnedTorus(Torus):
 
 
 class Sphere:
-    """Unit sphere S² with tangent vectors in R³ (nothing is singular at the poles)."""
+    """Unit sphere S² with tangent vectors in R³ (nothing is singular at the poles).
+
+    The per-point arithmetic runs in row blocks on ``threads`` (``stipple.parallel``): the same values as in one
+    piece, and inner products added block by block in order (the same bits for the same thread count). At M =
+    200000 it was a fifth of an iteration's time on one thread while the other waited.
+    """
 
     dimension = 3
 
-    def __init__(self):
+    def __init__(self, threads=1):
+        self.threads = threads
         # The last ``(points, step, geodesics)`` of ``_geodesics``.
         self._last = None
 
     def inner(self, points, u, v):
-        return float(np.einsum("ij,ij->", u, v))
+        return sum_blocks(self.threads, _dot, u, v)
 
     def norm(self, points, v):
         return np.sqrt(self.inner(points, v, v))
 
     def project(self, points, v):
         """Tangential part ``v - (x . v) x`` at every point."""
-        return v - np.einsum("ij,ij->i", points, v)[:, None] * points
+        return self._rows(_project, points, v)
 
     def riesz(self, points, covector):
         return self.project(points, covector)
@@ -154,22 +161,23 @@ class Sphere:
     def transport(self, points, v, w):
         """Parallel transport of ``w`` along the geodesic ``t -> exp_x(t v)`` to ``t = 1``: its component along
         the unit direction ``u`` of ``v`` turns into ``cos|v| u - sin|v| x``, the rest stays."""
-        cosine, sine, direction, end = self._geodesics(points, v)
-        along = np.einsum("ij,ij->i", w, direction)[:, None]
-        return self.project(end, w + along * ((cosine - 1) * direction - sine * points))
+        return self._rows(_transport, w, points, *self._geodesics(points, v))
 
     def _geodesics(self, points, v):
         """``(cos|v|, sin|v|, v / |v|, exp_x(v))`` per point, kept for the last ``(points, v)`` pair: CG retracts
         along its step and then transports two vectors along the same step."""
         if self._last is not None and self._last[0] is points and self._last[1] is v:
             return self._last[2]
-        length = np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
-        cosine, sine = np.cos(length), np.sin(length)
-        moved = cosine * points + np.sinc(length / np.pi) * v
-        end = moved / np.sqrt(np.einsum("ij,ij->i", moved, moved))[:, None]
-        direction = np.where(length > 0, v / np.where(length > 0, length, 1.0), 0.0)
-        self._last = (points, v, (cosine, sine, direction, end))
-        return self._last[2]
+        geodesics = (np.empty((len(v), 1)), np.empty((len(v), 1)), np.empty_like(v), np.empty_like(v))
+        map_blocks(self.threads, _geodesics, *geodesics, points, v)
+        self._last = (points, v, geodesics)
+        return geodesics
+
+    def _rows(self, function, like, *arrays):
+        """``function(out, *arrays)`` per row block into a new array shaped like ``like``."""
+        out = np.empty_like(like)
+        map_blocks(self.threads, function, out, like, *arrays)
+        return out
 
     def canonical(self, points):
         """Points scaled onto the unit sphere."""
@@ -180,6 +188,33 @@ class Sphere:
         return points / np.linalg.norm(points, axis=1, keepdims=True)
 
 
+def _dot(u, v):
+    return float(np.einsum("ij,ij->", u, v))
+
+
+def _project(out, points, v):
+    """``out = v - (x . v) x`` (``Sphere.project``'s rows; ``_rows`` passes ``like`` = ``points`` first)."""
+    np.multiply(np.einsum("ij,ij->i", points, v)[:, None], points, out=out)
+    np.subtract(v, out, out=out)
+
+
+def _transport(out, w, points, cosine, sine, direction, end):
+    """``Sphere.transport``'s rows: ``w + (w . u) ((cos - 1) u - sin x)``, projected onto the tangent plane at the
+    end point against drift."""
+    along = np.einsum("ij,ij->i", w, direction)[:, None]
+    _project(out, end, w + along * ((cosine - 1) * direction - sine * points))
+
+
+def _geodesics(cosine, sine, direction, end, points, v):
+    """``Sphere._geodesics``' rows, written into the first four arrays."""
+    length = np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
+    np.cos(length, out=cosine)
+    np.sin(length, out=sine)
+    moved = cosine * points + np.sinc(length / np.pi) * v
+    np.divide(moved, np.sqrt(np.einsum("ij,ij->i", moved, moved))[:, None], out=end)
+    np.copyto(direction, np.where(length > 0, v / np.where(length > 0, length, 1.0), 0.0))
+
+
 class ScaledSphere(Sphere):
     """The sphere with the metric scaled at every point, ``<u, v> = sum_i f(p_i) u_i . v_i``: CG preconditioned per
     dot, as on the torus (``ScaledTorus``; ``f`` from ``stipple.sphere.stiffness_map``).
@@ -188,17 +223,28 @@ class ScaledSphere(Sphere):
     ----------
     factor_at : callable
         ``(M, 3)`` unit vectors -> ``(M,)`` positive factors.
+    threads : int
+        As for ``Sphere``.
     """
 
-    def __init__(self, factor_at):
-        super().__init__()
+    def __init__(self, factor_at, threads=1):
+        super().__init__(threads)
         self.factor = PointFactors(factor_at)
 
     def inner(self, points, u, v):
-        return float(np.einsum("i,ij,ij->", self.factor(points), u, v))
+        return sum_blocks(self.threads, _scaled_dot, self.factor(points), u, v)
 
     def riesz(self, points, covector):
-        return self.project(points, covector) / self.factor(points)[:, None]
+        return self._rows(_scaled_riesz, covector, points, self.factor(points))
+
+
+def _scaled_dot(factor, u, v):
+    return float(np.einsum("i,ij,ij->", factor, u, v))
+
+
+def _scaled_riesz(out, covector, points, factor):
+    _project(out, points, covector)
+    np.divide(out, factor[:, None], out=out)
 
 
 class Rectangle(Torus):

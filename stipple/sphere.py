@@ -36,9 +36,11 @@ from .sphere_density import (
 )
 from .spread import spread_close_sphere
 from .torus import (
+    DERIVATIVE_EPSILON,
     DIRECT_BLUR_SIGMA,
     SOLVE_BANDWIDTH_FACTOR,
     check_bandwidth_factor,
+    derivative_accuracy,
     pair_share,
     periodic_blur,
     stiffness,
@@ -163,6 +165,7 @@ def sphere_problem(
     near_field=None,
     precondition=True,
     bandwidth_factor=SOLVE_BANDWIDTH_FACTOR,
+    derivative_epsilon=None,
 ):
     """The halftoning problem of ``weights`` (see ``halftone_sphere``) with ``n_points`` dots on S².
 
@@ -170,8 +173,9 @@ def sphere_problem(
     ``bandwidth`` at ``bandwidth_factor`` times ``default_bandwidth`` (the near field keeps the objective
     untruncated at any N), with ``precondition`` in the metric scaled by ``stiffness_map``, from the
     coarse-to-fine start where ``run`` starts "stratified" (``level`` and ``split``), ending with the spread step
-    (``stipple.spread.spread_close_sphere``) and stopping by ``settle`` (``MAP_SETTLE``). Designs and the Sobolev
-    kernel keep their bandwidth, the plain metric and their start.
+    (``stipple.spread.spread_close_sphere``) and stopping by ``settle`` (``MAP_SETTLE``), its derivatives'
+    transforms at ``derivative_epsilon`` (default ``stipple.torus.DERIVATIVE_EPSILON``, single precision). Designs
+    and the Sobolev kernel keep their bandwidth, the plain metric, their start and ``epsilon`` throughout.
     """
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
@@ -190,9 +194,13 @@ def sphere_problem(
     # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
     check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
-    objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, epsilon)
+    if derivative_epsilon is None:
+        derivative_epsilon = DERIVATIVE_EPSILON if picture else epsilon
+    accuracy = (epsilon, derivative_accuracy(epsilon, derivative_epsilon))
+    objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy)
     scaled = picture and precondition
-    manifold = ScaledSphere(partial(density_at, stiffness_map(density, n_points))) if scaled else Sphere()
+    factor_at = partial(density_at, stiffness_map(density, n_points)) if scaled else None
+    manifold = ScaledSphere(factor_at, threads) if scaled else Sphere(threads)
     # The same map with other counts: the coarse-to-fine start's levels (``stipple.multilevel``).
     same = partial(
         sphere_problem,
@@ -202,6 +210,7 @@ def sphere_problem(
         epsilon=epsilon,
         precondition=precondition,
         bandwidth_factor=bandwidth_factor,
+        derivative_epsilon=derivative_epsilon,
     )
     return Problem(
         domain="sphere",
@@ -228,17 +237,20 @@ def sphere_problem(
     )
 
 
-def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, epsilon):
+def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy):
     """``(objective, discrepancy)`` of ``n_points`` dots on ``density`` at degree ``bandwidth``: the kernel's
-    discrepancy, with the near field of the distance kernel added where asked."""
-    epsilon = check_epsilon(epsilon)
+    discrepancy, with the near field of the distance kernel added where asked. ``accuracy``: ``(epsilon,
+    derivative_epsilon)`` of the transforms (``SphereFourier``)."""
+    epsilon, derivative_epsilon = (check_epsilon(value) for value in accuracy)
     target = density.coefficients(bandwidth, threads)
     degrees, _ = alm_degrees_orders(bandwidth)
     kernel_coeffs = sphere_kernel(kernel, degrees)
     # The adjoints run on one thread (their order of addition is then fixed: the same bits every run for a thread
-    # count), beside the pairs on their share of the threads; the syntheses keep every thread.
+    # count), beside the pairs; the syntheses keep every thread. The pairs' blocks are spread over every thread
+    # too: the adjoint of ``set_points`` takes half as long as the pairs' search, and the pairs' second block
+    # fills the thread it leaves (docs/performance.md, eleventh round).
     pair_threads = pair_share(threads) if near_field else 0
-    fourier = SphereFourier(bandwidth, epsilon, threads, adjoint_threads=1)
+    fourier = SphereFourier(bandwidth, epsilon, threads, adjoint_threads=1, derivative_epsilon=derivative_epsilon)
     weight = target[0].real * np.sqrt(4 * np.pi) / n_points
     if not near_field:
         discrepancy = Discrepancy(fourier, kernel_coeffs, target, weight)
@@ -246,7 +258,7 @@ def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, 
     near = NearKernel(chord_profile, min(NEAR_FIELD_REACH / bandwidth, 0.5))
     cross_kernel = near.sphere_coefficients(bandwidth)[degrees]
     discrepancy = Discrepancy(fourier, kernel_coeffs - cross_kernel, target, weight, cross_kernel=cross_kernel)
-    pairs = NearField(near, weight, SpherePairs(), threads=pair_threads or threads)
+    pairs = NearField(near, weight, SpherePairs(), threads=threads)
     return SumObjective(discrepancy, pairs, concurrent=pair_threads > 0), discrepancy
 
 

@@ -370,22 +370,30 @@ class SphereFourier:
     Syntheses run on ``threads``, adjoints on ``adjoint_threads`` (default: the same). ducc0's adjoint with
     several threads adds the points' contributions in a scheduling-dependent order (two runs differ in the last
     digits) and its synthesis does not: one adjoint thread gives the same bits every time.
+
+    The derivatives' transforms (``gradient_synthesis``, ``gradient_analysis``, ``jacobian_gram``) run at
+    ``derivative_epsilon`` (default: ``epsilon``), in single precision where it allows
+    (``stipple.precision.precision``), as the torus's do; ``analysis``, whose sums the residual subtracts from
+    the target, keeps ``epsilon``.
     """
 
-    def __init__(self, lmax, epsilon, threads, adjoint_threads=None):
+    def __init__(self, lmax, epsilon, threads, adjoint_threads=None, derivative_epsilon=None):
         import ducc0
 
         self._sht = ducc0.sht
         self.lmax = lmax
         self.epsilon = epsilon
+        self.derivative_epsilon = epsilon if derivative_epsilon is None else derivative_epsilon
+        self._real, self._complex = precision(self.derivative_epsilon)
         self.threads = threads
         self.adjoint_threads = threads if adjoint_threads is None else adjoint_threads
         self.multiplicity = np.where(alm_degrees_orders(lmax)[1] == 0, 1.0, 2.0)
         self.counts = {"synthesis": 0, "adjoint": 0, "set_points": 0}
 
-    def _options(self, adjoint=False):
+    def _options(self, adjoint=False, derivative=True):
         threads = self.adjoint_threads if adjoint else self.threads
-        return dict(lmax=self.lmax, loc=self._loc, epsilon=self.epsilon, nthreads=threads)
+        epsilon = self.derivative_epsilon if derivative else self.epsilon
+        return dict(lmax=self.lmax, loc=self._loc, epsilon=epsilon, nthreads=threads)
 
     def set_points(self, points):
         theta, phi = spherical_angles(points)
@@ -396,14 +404,16 @@ class SphereFourier:
 
     def analysis(self):
         self.counts["adjoint"] += 1
-        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **self._options(adjoint=True))[0]
+        options = self._options(adjoint=True, derivative=False)
+        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **options)[0]
 
     def gradient_synthesis(self, coeffs):
         e_theta, e_phi = self._frame
         fields = []
         for alm in coeffs:
             self.counts["synthesis"] += 1
-            v_theta, v_phi = self._sht.synthesis_general(alm=alm[None], spin=1, mode="DERIV1", **self._options())
+            alm = alm.astype(self._complex, copy=False)[None]
+            v_theta, v_phi = self._sht.synthesis_general(alm=alm, spin=1, mode="DERIV1", **self._options())
             fields.append(v_theta[:, None] * e_theta + v_phi[:, None] * e_phi)
         return fields
 
@@ -423,9 +433,9 @@ class SphereFourier:
         results = []
         for v in vectors:
             self.counts["adjoint"] += 1
-            components = np.stack([np.sum(v * e_theta, axis=1), np.sum(v * e_phi, axis=1)])
+            components = np.stack([np.sum(v * e_theta, axis=1), np.sum(v * e_phi, axis=1)]).astype(self._real)
             alm = self._sht.adjoint_synthesis_general(
                 map=components, spin=1, mode="DERIV1", **self._options(adjoint=True)
             )
-            results.append(alm[0])
+            results.append(alm[0].astype(np.complex128, copy=False))
         return results

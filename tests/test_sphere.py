@@ -142,6 +142,55 @@ def test_exp_and_transport_properties(rng):
     np.testing.assert_allclose(sphere.transport(points, 0 * v, w), w, atol=1e-15)
 
 
+def test_blocks_on_threads_give_the_one_piece_values(rng, monkeypatch):
+    """The per-point arithmetic in row blocks on threads: the same arrays as in one piece, the inner products
+    the same sums to rounding (added block by block)."""
+    import stipple.parallel
+
+    monkeypatch.setattr(stipple.parallel, "MIN_BLOCK_SIZE", 16)
+    points = random_points(rng, 301)
+    assert len(stipple.parallel.row_blocks(points, 3)) == 3
+    factors = 0.1 + rng.random(301)
+    for one, blocked in (
+        (Sphere(), Sphere(3)),
+        (ScaledSphere(lambda p: factors), ScaledSphere(lambda p: factors, threads=3)),
+    ):
+        v = one.project(points, 0.3 * rng.standard_normal(points.shape))
+        w = rng.standard_normal(points.shape)
+        for method, arguments in (("project", (w,)), ("riesz", (w,)), ("retract", (v,)), ("transport", (v, w))):
+            np.testing.assert_array_equal(
+                getattr(blocked, method)(points, *arguments), getattr(one, method)(points, *arguments)
+            )
+        assert blocked.inner(points, v, w) == pytest.approx(one.inner(points, v, w), rel=1e-13)
+
+
+def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
+    """A map's derivatives run in single precision (``DERIVATIVE_EPSILON``), as on the torus: the energy (the
+    residual, at ``epsilon``) is the double-precision one to 1e-12, the gradient and the Hessian form are within
+    1e-4 of it; the levels keep the setting; designs and the Sobolev kernel keep ``epsilon`` throughout."""
+    from stipple.torus import DERIVATIVE_EPSILON
+
+    values = 0.1 + rng.random((18, 36))
+    points = random_points(rng, 2000)
+    exact = sphere_problem(values, 2000, threads=1, derivative_epsilon=1e-10)
+    single = sphere_problem(values, 2000, threads=1)
+    tangent = Sphere().project(points, rng.standard_normal(points.shape))
+    results = []
+    for problem in (exact, single):
+        problem.objective.set_points(points)
+        gradient = np.array(problem.objective.gradient())
+        results.append((problem.objective.energy(), gradient, problem.objective.hessian_gram([gradient, tangent])))
+    (energy, gradient, gram), (energy_single, gradient_single, gram_single) = results
+    assert energy_single == pytest.approx(energy, rel=1e-12)
+    assert 0 < np.linalg.norm(gradient_single - gradient) < 1e-4 * np.linalg.norm(gradient)
+    np.testing.assert_allclose(gram_single, gram, rtol=1e-4)
+    fourier = single.discrepancy.fourier
+    assert fourier.derivative_epsilon == DERIVATIVE_EPSILON and fourier.epsilon == exact.discrepancy.fourier.epsilon
+    assert single.level(500).discrepancy.fourier.derivative_epsilon == DERIVATIVE_EPSILON
+    for other in (sphere_problem(None, 500, threads=1), sphere_problem(values, 500, kernel="sobolev:1.5", threads=1)):
+        assert other.discrepancy.fourier.derivative_epsilon == other.discrepancy.fourier.epsilon
+
+
 def test_points_exactly_at_the_poles(rng):
     problem, points = small_problem(rng)
     points[:2] = [[0, 0, 1], [0, 0, -1]]
