@@ -299,9 +299,13 @@ def test_halftone_sphere_descends_and_is_reproducible():
     np.testing.assert_allclose(np.linalg.norm(first.points, axis=1), 1, atol=1e-14)
 
 
-def test_a_two_thread_sphere_run_gives_the_same_bits_every_time():
+def test_a_two_thread_sphere_run_gives_the_same_bits_every_time(monkeypatch):
     """ducc0's adjoint SHT on two threads adds in a scheduling-dependent order (five 2-thread runs of one map gave
-    five different files); the adjoints now run on one thread beside the pairs, the syntheses on both."""
+    five different files); the adjoints now run on one thread beside the pairs, the syntheses on both. Blocks
+    are forced small, so that the pairs and the per-point arithmetic are split over the threads as at large M."""
+    import stipple.parallel
+
+    monkeypatch.setattr(stipple.parallel, "MIN_BLOCK_SIZE", 64)
     problem = sphere_problem(three_gaussians, 800, threads=2)
     assert problem.discrepancy.fourier.adjoint_threads == 1 and problem.discrepancy.fourier.threads == 2
     runs = [halftone_sphere(three_gaussians, 800, threads=2, iterations=30, seed=7).points for _ in range(4)]
