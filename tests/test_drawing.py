@@ -249,3 +249,21 @@ def test_the_tone_stroke_inks_the_mean_darkness_where_the_line_crosses_itself():
 
     assert drawn(0.4 * 120 * 80 / closed_length(pixels)) < 0.35
     assert drawn(tone_stroke(pixels, (80, 120), 0.4)) == pytest.approx(0.4, abs=0.01)
+
+
+def test_a_very_tall_image_gets_a_narrower_default_png_not_a_huge_one(tmp_path):
+    """The default PNG is at least 1024 px wide, but at most ``TALLEST`` times as tall as a square picture's side:
+    a 3 x 512 strip was drawn 1024 x 174763 pixels (5.4 GB, a file Pillow then refuses to open)."""
+    from stipple.io.png import TALLEST, default_png_width
+
+    assert default_png_width(30150) == default_png_width(30150, (256, 256)) == 1024
+    assert default_png_width(10**6, (1024, 1024)) == 4000
+    assert default_png_width(1000, (512, 1536)) == 1024  # a 1:3 image keeps the square's width
+    assert default_png_width(1000, (3, 512)) == TALLEST * 1024 * 3 // 512
+    Image.fromarray(np.full((512, 3), 90, dtype=np.uint8)).save(tmp_path / "strip.png")
+    result = CliRunner().invoke(
+        main, ["torus", str(tmp_path / "strip.png"), "-M", "300", "-q", "-o", str(tmp_path / "s.png")]
+    )
+    assert result.exit_code == 0, result.output
+    with Image.open(tmp_path / "s.png") as picture:
+        assert picture.size == (24, TALLEST * 1024)

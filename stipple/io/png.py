@@ -54,14 +54,25 @@ def png_bytes(image):
     return buffer.getvalue()
 
 
-def default_png_width(count):
-    return int(max(1024, 8 * round(np.sqrt(count) / 2)))
+# A default PNG's longer side is at most this many times its side for a square canvas: a tall image gets the
+# width of a square one until it is TALLEST times taller (a 3 x 512 strip was drawn 1024 x 174763 pixels, 5.4 GB
+# of memory, a file that Pillow's decompression-bomb guard then refuses to read).
+TALLEST = 4
+
+
+def default_png_width(count, canvas=(1.0, 1.0)):
+    """Pixels across a PNG of ``count`` dots on ``canvas`` (``(width, height)``, any units): at least 1024 and 8
+    per two dots across a square's side, the height at most ``TALLEST`` times that (a very tall canvas is drawn
+    narrower)."""
+    side = int(max(1024, 8 * round(np.sqrt(count) / 2)))
+    width, height = (float(value) for value in canvas)
+    return max(1, min(side, int(TALLEST * side * width / height))) if height > 0 else side
 
 
 def check_png_outputs(formats, canvas, png_width, count):
     """Before a run: refuse PNG outputs whose canvas (user units ``(width, height)``) would not fit in memory."""
     if ".png" in formats:
-        check_png_canvas(canvas, png_width or default_png_width(count))
+        check_png_canvas(canvas, png_width or default_png_width(count, canvas))
 
 
 def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):

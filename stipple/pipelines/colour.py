@@ -81,7 +81,9 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
     n_points = settings.pop("n_points")
     if ".png" in formats:
         canvas = rgb.shape[1::-1]
-        check_png_canvas(canvas, recipe.draw["png_width"] or default_png_width(n_points), layers=INK_PICTURE_LAYERS)
+        check_png_canvas(
+            canvas, recipe.draw["png_width"] or default_png_width(n_points, canvas), layers=INK_PICTURE_LAYERS
+        )
 
     def placement(union):
         # The inks' darkness together as separated, before a pen's clip: what the notes on the image speak of.
@@ -134,7 +136,8 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
         layers = {layer.name: layer for layer in separated}
         tone = tone_settings([layers[name].density for name in inks], rgb, palette)
     if ".png" in formats:
-        check_png_canvas(shape[::-1], draw["png_width"] or default_png_width(len(pixels)), layers=INK_PICTURE_LAYERS)
+        canvas = shape[::-1]
+        check_png_canvas(canvas, draw["png_width"] or default_png_width(len(pixels), canvas), layers=INK_PICTURE_LAYERS)
     rows, columns = shape
     unit = np.mod(np.asarray(pixels) / np.array([columns, rows]), 1.0)
     placed = [(name, ink_colour(name), unit[names == name]) for name in inks]

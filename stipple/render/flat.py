@@ -78,7 +78,7 @@ def layered_drawing(
     return Drawing(
         (columns, rows),
         width,
-        png_width or default_png_width(count),
+        png_width or default_png_width(count, (columns, rows)),
         drawn,
         background=background,
         pen_width=pen,
