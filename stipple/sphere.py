@@ -5,7 +5,7 @@ from functools import partial
 
 import numpy as np
 
-from .errors import StippleError
+from .errors import MissingInput, StippleError
 from .halftone import (
     DEFAULT_SETTLE,
     MAX_BANDWIDTH,
@@ -345,16 +345,29 @@ def picture_darkness(density):
 
 
 def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_range=None, lon0=0.0):
-    """The density of a map (``-`` is stdin), a built-in name (``builtin:NAME``) or, with ``uniform``, w ≡ 1."""
+    """The density of a map (``-`` is stdin), a built-in name (``builtin:NAME``) or, with ``uniform``, w ≡ 1.
+
+    ``invert``, ``gamma`` and ``value_range`` transform a map's or an image's values; given with a built-in
+    density or ``uniform`` they are refused (they would be ignored)."""
     if uniform:
         if source is not None:
             raise StippleError("give either MAP or --uniform, not both")
+        _refuse_transfer("--uniform", invert, gamma, value_range)
         return BUILTINS["uniform"]
     if source is None:
-        raise StippleError("missing MAP (a .npy map, an image, builtin:NAME) or --uniform")
+        raise MissingInput("missing MAP (a .npy map, an image, builtin:NAME) or --uniform")
     if source.startswith("builtin:"):
         name = source.partition(":")[2]
         if name not in BUILTINS:
             raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
+        _refuse_transfer(source, invert, gamma, value_range)
         return BUILTINS[name]
     return CellMap(load_input(source, invert=invert, gamma=gamma, value_range=value_range), lon0)
+
+
+def _refuse_transfer(what, invert, gamma, value_range):
+    """One line naming the map options given with a density that has no map values to transform."""
+    given = [name for name, on in (("--invert", invert), ("--gamma", gamma != 1.0), ("--range", value_range)) if on]
+    if given:
+        verb = "transforms" if len(given) == 1 else "transform"
+        raise StippleError(f"{', '.join(given)} {verb} a map's or an image's values, not {what}")

@@ -77,8 +77,9 @@ def test_uniform_and_builtins():
 @pytest.mark.parametrize(
     "args,message",
     [
-        (["sphere", "-M", 10], "missing MAP"),
         (["sphere", "builtin:nope"], "unknown built-in density"),
+        (["sphere", "builtin:gaussians", "--invert"], "--invert transforms a map's or an image's values, not builtin"),
+        (["sphere", "--uniform", "--gamma", 3, "--range", 0, 1], "--gamma, --range transform a map's or an image's"),
         (["sphere", "--uniform", "--kernel", "gauss"], "kernel must be"),
         (["sphere", "--uniform", "--view", "10"], "view must be LON,LAT"),
         (["sphere", "--uniform", "-N", 0], "bandwidth (degree) must be an integer"),
@@ -88,6 +89,18 @@ def test_sphere_bad_options(args, message):
     result = run(args + ["-q"])
     assert result.exit_code == 1
     assert message in result.output
+
+
+def test_a_missing_map_or_input_is_bad_usage(tmp_path):
+    """Exit code 2, as a missing IMAGE of ``stipple torus`` (docs/errors.md), for the sphere's MAP and for the
+    INPUT that ``evaluate`` needs for a torus's or an ink layer's points."""
+    result = run(["sphere", "-M", 10, "-q"])
+    assert result.exit_code == 2 and "missing MAP" in result.output
+    (tmp_path / "p.csv").write_text("x,y\n1,2\n3,4\n")
+    (tmp_path / "l.csv").write_text("x,y,class\n1,2,c\n3,4,m\n")
+    for points in ("p.csv", "l.csv"):
+        result = run(["evaluate", tmp_path / points])
+        assert result.exit_code == 2 and "missing INPUT" in result.output
 
 
 def test_map_and_uniform_together_is_an_error(map_path):

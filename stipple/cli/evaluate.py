@@ -5,7 +5,7 @@ import json
 
 import click
 
-from ..errors import StippleError
+from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
 from .options import check_extension, check_longitude, parse_levels, warn_outside
@@ -144,6 +144,8 @@ def evaluate(
             warn_outside(count, report["points"], size, "the measures wrap them around")
             warn_unjudged(report, input_source)
             commit_outputs(report_files(report, json_path, spectrum_path))
+    except MissingInput as error:
+        raise click.UsageError(str(error)) from None
     except StippleError as error:
         raise click.ClickException(str(error)) from None
 

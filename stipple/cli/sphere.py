@@ -4,7 +4,7 @@ import time
 
 import click
 
-from ..errors import StippleError
+from ..errors import MissingInput, StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
 from .options import check_longitude, common_options, init_input, is_default, parse_view, render_settings, resolve_input
@@ -108,6 +108,8 @@ def sphere(ctx, map_source, **options):
                 **settings,
             )
             write_outputs(options["outputs"], files, options["quiet"])
+    except MissingInput as error:
+        raise click.UsageError(str(error)) from None
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)

@@ -7,7 +7,7 @@ import io
 import numpy as np
 
 from ..colour import check_layer_names, parse_palette, separate
-from ..errors import StippleError
+from ..errors import MissingInput, StippleError
 from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
 from ..io.sources import STDIN_NAME, read_source, source_or_stdin
 from ..line.problem import line_problem
@@ -56,7 +56,7 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     """The evaluation report of torus pixels or sphere unit vectors against their input."""
     if domain == "torus":
         if input_source is None:
-            raise StippleError("missing INPUT: the image or map the points were made from")
+            raise MissingInput("missing INPUT: the image or map the points were made from")
         weights = load_input(input_source, **image_transfer(options))
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
         problem = torus_problem(weights, len(points), bandwidth, **MEASURE_OPTIONS)
@@ -92,7 +92,7 @@ def evaluate_layers(pixels, names, input_source, bandwidth, options):
     """The report of all dots against the inks' summed density, with ``classes``: each ink's dots against its
     own density (its count beside its quota ``M · mass share``)."""
     if input_source is None:
-        raise StippleError("missing INPUT: the colour image the layered points were made from")
+        raise MissingInput("missing INPUT: the colour image the layered points were made from")
     rgb = load_colour(input_source)
     separation = parse_palette(options["palette"])
     layers = separate(rgb, separation, options["black"])
