@@ -88,19 +88,29 @@ def test_inverted_tone_is_the_light(tmp_path):
     assert np.abs(target[inner] - drawn[inner]).mean() < 0.04
 
 
-def test_a_page_of_one_gray_with_small_marks_gets_no_levels_hint(tmp_path):
-    """Its 0.5th and 99.5th percentiles are one gray: --levels auto would refuse it, so it is not suggested."""
+def test_a_page_with_a_small_mark_or_spot_gets_no_levels_hint_and_auto_levels_keep_the_spot(tmp_path):
+    """A plain page with a small mark, or a soft spot, is no faint image: no hint for --levels auto. Where the
+    0.5th and 99.5th percentiles would clip the mark or the spot (the page's one gray at both; the spot's tail),
+    --levels auto stretches the extremes instead: the page white, the spot's centre black and its size kept (the
+    percentiles made a 0.92 page with a sigma = 5 px spot a black disc twice as wide)."""
+    from stipple.io.images import load_density
+
     page = np.full((60, 80), 247, dtype=np.uint8)
     page[20:23, 30:33] = 13
+    y, x = np.mgrid[:256, :256]
+    spot = np.exp(-((x - 128.0) ** 2 + (y - 128.0) ** 2) / 50)
     Image.fromarray(page).save(tmp_path / "page.png")
-    result = CliRunner().invoke(
-        main, ["torus", str(tmp_path / "page.png"), "-M", "200", "--iterations", "2", "-o", str(tmp_path / "a.csv")]
-    )
-    assert result.exit_code == 0 and "--levels auto" not in result.output
-    refused = CliRunner().invoke(
-        main, ["torus", str(tmp_path / "page.png"), "-M", "200", "--levels", "auto", "-o", str(tmp_path / "b.csv")]
-    )
-    assert refused.exit_code != 0 and "nothing to stretch" in refused.output
+    Image.fromarray((234.6 * (1 - spot)).astype(np.uint8)).save(tmp_path / "spot.png")
+    for name in ("page.png", "spot.png"):
+        result = CliRunner().invoke(
+            main, ["torus", str(tmp_path / name), "-M", "200", "--iterations", "2", "-o", str(tmp_path / "a.csv")]
+        )
+        assert result.exit_code == 0 and "--levels auto" not in result.output
+        stretched = load_density(tmp_path / name, levels="auto")
+        assert stretched.min() == 0.0 and stretched.max() == 1.0
+    assert np.count_nonzero(load_density(tmp_path / "page.png", levels="auto") > 0) == 9
+    darkness = load_density(tmp_path / "spot.png", levels="auto")
+    assert 0.8 < np.count_nonzero(darkness > 0.5) / np.count_nonzero(spot > 0.5) < 1.2
 
 
 def test_levels_stretch_a_faint_image_and_say_what_was_wrong(tmp_path):

@@ -182,7 +182,8 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
         ``.npy`` maps: the values sent to 0 and 1 (default: the map's minimum and maximum).
     levels : "auto" or (float, float), optional
         Images: the gray values ``(black, white)`` in [0, 1] stretched to black and white before the above
-        (a levels adjustment); "auto": the image's 0.5th and 99.5th percentiles. Default: none.
+        (a levels adjustment); "auto": ``auto_levels`` (the 0.5th and 99.5th percentiles, or the extremes where
+        the percentiles would clip a feature). Default: none.
     strict : bool
         Refuse ``value_range`` for an image and ``levels`` for a map (one input: they would be ignored); False
         lets a batch of images and maps give each its own (``stipple batch``).
@@ -227,20 +228,30 @@ def _levels_text(levels):
 
 
 def stretch_levels(gray, levels):
-    """Gray values with ``levels = (black, white)`` (or "auto": the 0.5th and 99.5th percentiles) sent to 0 and 1,
+    """Gray values with ``levels = (black, white)`` (or "auto": ``auto_levels``) sent to 0 and 1,
     linearly, clipped; unchanged for None (see ``load_density``)."""
     if levels is None:
         return gray
     if levels == "auto":
-        black, white = np.percentile(gray, [0.5, 99.5])
+        black, white = auto_levels(gray)
         if not black < white:
-            raise StippleError(
-                f"--levels auto: the image has one gray value ({black:.3g}) at its 0.5th and 99.5th percentiles; "
-                "nothing to stretch"
-            )
+            raise StippleError(f"--levels auto: the image has one gray value ({black:.3g}); nothing to stretch")
     else:
         black, white = check_levels(levels)
     return np.clip((gray - black) / (white - black), 0.0, 1.0)
+
+
+def auto_levels(values):
+    """``(low, high)`` that ``--levels auto`` stretches to 0 and 1: the 0.5th and 99.5th percentiles, which leave
+    out a scan's specks and noise, unless what lies beyond them differs from the rest more than the rest varies
+    within them (a small dark spot on a plain page: the percentiles would clip the spot and widen it to a black
+    disc); then the smallest and largest values."""
+    low, high = np.percentile(values, [0.5, 99.5])
+    beyond = np.sum(np.maximum(values - high, 0.0)) + np.sum(np.maximum(low - values, 0.0))
+    within = np.clip(values, low, high)
+    if beyond > np.sum(np.abs(within - np.median(within))):
+        return float(np.min(values)), float(np.max(values))
+    return float(low), float(high)
 
 
 def check_levels(levels):
