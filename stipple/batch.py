@@ -252,12 +252,7 @@ def connect(address):
     ``CONNECT_TIMEOUT`` seconds: a listener that never answers cannot hang the batch.
     """
     _, host, port = scheduler_address(address)
-    try:
-        from distributed import Client
-    except ImportError:
-        raise StippleError(
-            "--scheduler needs Dask distributed: pip install 'stipple[cluster]' (or dask[distributed])"
-        ) from None
+    Client = cluster_client()  # noqa: N806 (the class, as distributed names it)
     probe(address, host, port)
 
     def open_client():
@@ -269,6 +264,18 @@ def connect(address):
         raise
     except (OSError, TimeoutError, ValueError) as error:
         raise StippleError(f"cannot reach the Dask scheduler {address}: {' '.join(str(error).split())}") from None
+
+
+def cluster_client():
+    """``distributed.Client``, or a StippleError naming the extra to install (checked before a batch makes its
+    output folder)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise StippleError(
+            "--scheduler needs Dask distributed: pip install 'stipple[cluster]' (or dask[distributed])"
+        ) from None
+    return Client
 
 
 def scheduler_address(address):

@@ -183,6 +183,7 @@ def test_scheduler_without_distributed_names_the_extra(images, tmp_path, monkeyp
     result = run(["batch", *images, "-d", tmp_path / "out", *SMALL, "--scheduler", "tcp://127.0.0.1:8786"])
     assert result.exit_code == 1
     assert "pip install 'stipple[cluster]'" in result.stderr and result.stderr.count("\n") == 1
+    assert not (tmp_path / "out").exists()  # said before the folder is made (docs/errors.md)
 
 
 def mtimes(folder):

@@ -92,7 +92,7 @@ batch.params.extend(torus_params())
 
 def plan(inputs, options):
     """The batch's jobs, every option, file and output checked before any work; makes the output folder."""
-    from ..batch import expand_images, is_done, parse_formats, plan_batch, scheduler_address
+    from ..batch import cluster_client, expand_images, is_done, parse_formats, plan_batch, scheduler_address
     from ..halftone import check_integer
     from ..pipelines.image import check_recipe
 
@@ -106,6 +106,7 @@ def plan(inputs, options):
     formats = parse_formats(options["formats"])
     if options["scheduler"] is not None:
         scheduler_address(options["scheduler"])
+        cluster_client()
     recipe = torus_recipe(options)
     # A folder may mix images and .npy maps: --range is the maps', --levels the images'.
     recipe = replace(recipe, load={**recipe.load, "strict": False})
