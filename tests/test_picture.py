@@ -107,6 +107,20 @@ def test_floyd_steinberg_has_about_the_dots_asked_for_and_the_tone():
     assert colour.shape == (60, 90, 3) and abs(inked - 1500) < 0.05 * 1500
 
 
+def test_floyd_steinberg_of_white_dots_counts_the_white_pixels():
+    """With ``--invert`` the dots are white on black: the baseline has about ``count`` white pixels, not black
+    ones (a dark input's 8000 black pixels overstated its error three times), and keeps the tone."""
+    reference = ramp(64, 96, 0.05, 0.5)  # mostly dark: white dots are the few
+    picture, dots = floyd_steinberg(reference, 800, light_dots=True)
+    negative, same = floyd_steinberg(1.0 - reference, 800)
+    assert dots == same and abs(dots - 800) < 0.05 * 800
+    np.testing.assert_allclose(picture, 1.0 - negative, atol=1e-12)
+    assert measure_picture(reference, picture, sigmas=(4.0,))[0].rmse < 0.03
+    black_dots, _ = floyd_steinberg(reference, 800)
+    error = [measure_picture(reference, p, sigmas=(4.0,))[0].rmse for p in (picture, black_dots)]
+    assert error[1] > 1.5 * error[0]
+
+
 def test_area_average_is_exact_at_any_ratio(rng):
     """Floyd-Steinberg's dots come back onto the input's grid by exact areas (a nearest-neighbour 4x enlargement
     moved their edges by up to an eighth of a pixel): whole multiples, a split pixel by hand, the mean kept."""

@@ -203,7 +203,7 @@ def measure_picture(reference, picture, *, sigmas=SIGMAS, inset=0.0):
     return [gray_measures(reference, picture, s) for s in sigmas]
 
 
-def floyd_steinberg(reference, count):
+def floyd_steinberg(reference, count, light_dots=False):
     """The baseline a user would otherwise pick: Floyd-Steinberg error diffusion with about ``count`` dots.
 
     The input is scaled (Pillow, Lanczos) so that its dithered version has about ``count`` ink pixels (the scale
@@ -219,6 +219,9 @@ def floyd_steinberg(reference, count):
         Luminance ``(H, W)`` or sRGB ``(H, W, 3)`` in [0, 1].
     count : int
         The number of dots, >= 1.
+    light_dots : bool
+        Gray only: the dots are white on black (``--invert``): the negative is dithered with ``count`` black
+        pixels and negated back (the black ones were counted as dots before 2026-11-26, overstating its error).
 
     Returns
     -------
@@ -230,6 +233,9 @@ def floyd_steinberg(reference, count):
     if count < 1:
         raise ValueError(f"count must be at least 1, not {count}")
     colour = np.ndim(reference) == 3
+    if light_dots and not colour:
+        negative, dots = floyd_steinberg(1.0 - np.asarray(reference, dtype=np.float64), count)
+        return 1.0 - negative, dots
     image = Image.fromarray(np.round(np.clip(reference, 0, 1) * 255).astype(np.uint8), "RGB" if colour else "L")
     dither = _dither_cube if colour else _dither_black
     dithered, dots = _search_scale(image, count, dither)

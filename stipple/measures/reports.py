@@ -209,7 +209,7 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
         "stipple": [m.as_dict() for m in measure_picture(reference, drawn, sigmas=sigmas, inset=inset)],
     }
     if dots is not None:
-        baseline, inked = floyd_steinberg(reference, dots)
+        baseline, inked = floyd_steinberg(reference, dots, light_dots=bool(options.get("invert")))
         report["floyd_steinberg"] = {
             "dots": inked,
             "measures": [m.as_dict() for m in measure_picture(reference, baseline, sigmas=sigmas)],
