@@ -207,7 +207,9 @@ def check_weights(weights):
     if np.any(weights < 0):
         raise StippleError("weights must be non-negative")
     if not np.any(weights > 0):
-        raise StippleError("the image is blank (all white): there is nothing to place dots on")
+        raise StippleError(
+            "the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
+        )
     return weights
 
 

@@ -105,3 +105,6 @@ def test_range_and_levels_are_refused_where_they_would_be_ignored(tmp_path):
         load_density(tmp_path / "g.png", value_range=(0.0, 1.0))
     with pytest.raises(StippleError, match="--levels is for images"):
         load_density(tmp_path / "m.npy", levels="auto")
+    # A map that --range leaves at zero was called "the image is blank (all white)".
+    with pytest.raises(StippleError, match="no density is left under --range 100 200: every value is at or below 100"):
+        load_density(tmp_path / "m.npy", value_range=(100.0, 200.0))

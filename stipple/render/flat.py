@@ -58,7 +58,9 @@ def layered_drawing(
     radius, stroke, pen = drawn_sizes(width, columns, dot_radius, dot_style, pen_width)
     if style == "tone" and coverages is not None and radius is None and dot_style == "disc":
         drawn = tone_dots(placed, (columns, rows), coverages, target=target, periodic=True)
-        notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii"]
+        copies = sum(len(dots.copies[0]) for dots in drawn if dots.copies is not None)
+        across = f", and {copies} copies of those crossing an edge drawn across the opposite one" if copies else ""
+        notes = [f"{count} dots in {len(drawn)} layer(s), tone-true radii{across}"]
     else:
         tone = ink_radius((0.5 if ink is None else ink) * rows * columns, max(count, 1))
         if coverages is not None:
