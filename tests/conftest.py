@@ -18,6 +18,20 @@ def energy_at(objective, points):
     return objective.energy()
 
 
+def assert_derivatives_alike(exact, single, points, other):
+    """Two problems that differ only in their derivatives' accuracy: the same energy to 1e-12 (the residual keeps
+    its ``epsilon``), the gradient and the Hessian form on ``[gradient, other]`` within 1e-4 and not the same."""
+    results = []
+    for problem in (exact, single):
+        problem.objective.set_points(points)
+        gradient = np.array(problem.objective.gradient())
+        results.append((problem.objective.energy(), gradient, problem.objective.hessian_gram([gradient, other])))
+    (energy, gradient, gram), (energy_single, gradient_single, gram_single) = results
+    assert energy_single == pytest.approx(energy, rel=1e-12)
+    assert 0 < np.linalg.norm(gradient_single - gradient) < 1e-4 * np.linalg.norm(gradient)
+    np.testing.assert_allclose(gram_single, gram, rtol=1e-4)
+
+
 def gradient_taylor_slope(objective, points, direction, steps):
     """Slope of ``|E(p + t d) - E(p) - t <grad E, d>|`` in t (2 for a correct gradient)."""
     objective.set_points(points)

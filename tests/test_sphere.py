@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 import scipy.special as sp
-from conftest import taylor_slope
+from conftest import assert_derivatives_alike, taylor_slope
 from scipy.special import roots_legendre
 
 from stipple.halftone import run
@@ -174,16 +174,7 @@ def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
     points = random_points(rng, 2000)
     exact = sphere_problem(values, 2000, threads=1, derivative_epsilon=1e-10)
     single = sphere_problem(values, 2000, threads=1)
-    tangent = Sphere().project(points, rng.standard_normal(points.shape))
-    results = []
-    for problem in (exact, single):
-        problem.objective.set_points(points)
-        gradient = np.array(problem.objective.gradient())
-        results.append((problem.objective.energy(), gradient, problem.objective.hessian_gram([gradient, tangent])))
-    (energy, gradient, gram), (energy_single, gradient_single, gram_single) = results
-    assert energy_single == pytest.approx(energy, rel=1e-12)
-    assert 0 < np.linalg.norm(gradient_single - gradient) < 1e-4 * np.linalg.norm(gradient)
-    np.testing.assert_allclose(gram_single, gram, rtol=1e-4)
+    assert_derivatives_alike(exact, single, points, Sphere().project(points, rng.standard_normal(points.shape)))
     fourier = single.discrepancy.fourier
     assert fourier.derivative_epsilon == DERIVATIVE_EPSILON and fourier.epsilon == exact.discrepancy.fourier.epsilon
     assert single.level(500).discrepancy.fourier.derivative_epsilon == DERIVATIVE_EPSILON

@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from conftest import backend_params
+from conftest import assert_derivatives_alike, backend_params
 from scipy.special import roots_legendre
 
 from stipple.errors import StippleError
@@ -209,15 +209,7 @@ def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
     points = rng.random((3000, 2))
     exact = torus_problem(weights, 3000, threads=1)
     single = torus_problem(weights, 3000, threads=1, derivative_epsilon=DERIVATIVE_EPSILON)
-    results = []
-    for problem in (exact, single):
-        problem.objective.set_points(points)
-        gradient = np.array(problem.objective.gradient())
-        results.append((problem.objective.energy(), gradient, problem.objective.hessian_gram([gradient, points])))
-    (energy, gradient, gram), (energy_single, gradient_single, gram_single) = results
-    assert energy_single == pytest.approx(energy, rel=1e-12)
-    assert 0 < np.linalg.norm(gradient_single - gradient) < 1e-4 * np.linalg.norm(gradient)
-    np.testing.assert_allclose(gram_single, gram, rtol=1e-4)
+    assert_derivatives_alike(exact, single, points, points)
     assert single.discrepancy.fourier.nufft.epsilon == DERIVATIVE_EPSILON
     assert single.discrepancy.fourier.epsilon == exact.discrepancy.fourier.epsilon == DEFAULT_EPSILON
     for other in (single.level(1000), single.coarse(16)):
