@@ -73,7 +73,10 @@ OPTIONS = {
     "render 1e308 --order": (["render", "big.csv", "--size", "16,12", "--order", "-o", "b.svg"], "pixel positions"),
     "evaluate one point": (["evaluate", "one.csv", "in.png"], "evaluate needs at least 2 points, not 1"),
     "evaluate one sphere point": (["evaluate", "s1.csv", "--uniform", "-N", "4"], "at least 2 points"),
-    "tall PNG canvas": (["render", "p.csv", "--size", "2,100000", "-o", "t.png"], "more than 262144 per side"),
+    "tall PNG canvas": (
+        ["render", "p.csv", "--size", "2,100000", "--png-width", "1024", "-o", "t.png"],
+        "more than 262144 per side",
+    ),
     "wide PNG canvas": (["render", "p.csv", "--png-width", "32768", "-o", "t.png"], "smaller --png-width"),
     "wide PNG before a torus run": (["torus", "in.png", *FAST, "--png-width", "32768", "-o", "t.png"], "GiB of memory"),
     "wide PNG before a sphere run": (

@@ -63,7 +63,7 @@ TALLEST = 4
 def default_png_width(count, canvas=(1.0, 1.0)):
     """Pixels across a PNG of ``count`` dots on ``canvas`` (``(width, height)``, any units): at least 1024 and 8
     per two dots across a square's side, the height at most ``TALLEST`` times that (a very tall canvas is drawn
-    narrower)."""
+    narrower, down to one pixel)."""
     side = int(max(1024, 8 * round(np.sqrt(count) / 2)))
     width, height = (float(value) for value in canvas)
     return max(1, min(side, int(TALLEST * side * width / height))) if height > 0 else side
