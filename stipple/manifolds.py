@@ -142,14 +142,14 @@ class Sphere:
         self._last = None
 
     def inner(self, points, u, v):
-        return sum_blocks(self.threads, _dot, u, v)
+        return sum_blocks(self.threads, _dot_rows, u, v)
 
     def norm(self, points, v):
         return np.sqrt(self.inner(points, v, v))
 
     def project(self, points, v):
         """Tangential part ``v - (x . v) x`` at every point."""
-        return self._rows(_project, points, v)
+        return self._rows(_project_rows, points, v)
 
     def riesz(self, points, covector):
         return self.project(points, covector)
@@ -161,7 +161,7 @@ class Sphere:
     def transport(self, points, v, w):
         """Parallel transport of ``w`` along the geodesic ``t -> exp_x(t v)`` to ``t = 1``: its component along
         the unit direction ``u`` of ``v`` turns into ``cos|v| u - sin|v| x``, the rest stays."""
-        return self._rows(_transport, w, points, *self._geodesics(points, v))
+        return self._rows(_transport_rows, w, points, *self._geodesics(points, v))
 
     def _geodesics(self, points, v):
         """``(cos|v|, sin|v|, v / |v|, exp_x(v))`` per point, kept for the last ``(points, v)`` pair: CG retracts
@@ -169,12 +169,12 @@ class Sphere:
         if self._last is not None and self._last[0] is points and self._last[1] is v:
             return self._last[2]
         geodesics = (np.empty((len(v), 1)), np.empty((len(v), 1)), np.empty_like(v), np.empty_like(v))
-        map_blocks(self.threads, _geodesics, *geodesics, points, v)
+        map_blocks(self.threads, _geodesic_rows, *geodesics, points, v)
         self._last = (points, v, geodesics)
         return geodesics
 
     def _rows(self, function, like, *arrays):
-        """``function(out, *arrays)`` per row block into a new array shaped like ``like``."""
+        """``function(out, like, *arrays)`` per row block, into a new array ``out`` shaped like ``like``."""
         out = np.empty_like(like)
         map_blocks(self.threads, function, out, like, *arrays)
         return out
@@ -188,24 +188,24 @@ class Sphere:
         return points / np.linalg.norm(points, axis=1, keepdims=True)
 
 
-def _dot(u, v):
+def _dot_rows(u, v):
     return float(np.einsum("ij,ij->", u, v))
 
 
-def _project(out, points, v):
-    """``out = v - (x . v) x`` (``Sphere.project``'s rows; ``_rows`` passes ``like`` = ``points`` first)."""
+def _project_rows(out, points, v):
+    """``out = v - (x . v) x``: ``Sphere.project``'s rows."""
     np.multiply(np.einsum("ij,ij->i", points, v)[:, None], points, out=out)
     np.subtract(v, out, out=out)
 
 
-def _transport(out, w, points, cosine, sine, direction, end):
+def _transport_rows(out, w, points, cosine, sine, direction, end):
     """``Sphere.transport``'s rows: ``w + (w . u) ((cos - 1) u - sin x)``, projected onto the tangent plane at the
     end point against drift."""
     along = np.einsum("ij,ij->i", w, direction)[:, None]
-    _project(out, end, w + along * ((cosine - 1) * direction - sine * points))
+    _project_rows(out, end, w + along * ((cosine - 1) * direction - sine * points))
 
 
-def _geodesics(cosine, sine, direction, end, points, v):
+def _geodesic_rows(cosine, sine, direction, end, points, v):
     """``Sphere._geodesics``' rows, written into the first four arrays."""
     length = np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
     np.cos(length, out=cosine)
@@ -232,18 +232,18 @@ class ScaledSphere(Sphere):
         self.factor = PointFactors(factor_at)
 
     def inner(self, points, u, v):
-        return sum_blocks(self.threads, _scaled_dot, self.factor(points), u, v)
+        return sum_blocks(self.threads, _scaled_dot_rows, self.factor(points), u, v)
 
     def riesz(self, points, covector):
-        return self._rows(_scaled_riesz, covector, points, self.factor(points))
+        return self._rows(_scaled_riesz_rows, covector, points, self.factor(points))
 
 
-def _scaled_dot(factor, u, v):
+def _scaled_dot_rows(factor, u, v):
     return float(np.einsum("i,ij,ij->", factor, u, v))
 
 
-def _scaled_riesz(out, covector, points, factor):
-    _project(out, points, covector)
+def _scaled_riesz_rows(out, covector, points, factor):
+    _project_rows(out, points, covector)
     np.divide(out, factor[:, None], out=out)
 
 

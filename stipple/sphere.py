@@ -36,7 +36,6 @@ from .sphere_density import (
 )
 from .spread import spread_close_sphere
 from .torus import (
-    DERIVATIVE_EPSILON,
     DIRECT_BLUR_SIGMA,
     SOLVE_BANDWIDTH_FACTOR,
     check_bandwidth_factor,
@@ -174,8 +173,10 @@ def sphere_problem(
     untruncated at any N), with ``precondition`` in the metric scaled by ``stiffness_map``, from the
     coarse-to-fine start where ``run`` starts "stratified" (``level`` and ``split``), ending with the spread step
     (``stipple.spread.spread_close_sphere``) and stopping by ``settle`` (``MAP_SETTLE``), its derivatives'
-    transforms at ``derivative_epsilon`` (default ``stipple.torus.DERIVATIVE_EPSILON``, single precision). Designs
-    and the Sobolev kernel keep their bandwidth, the plain metric, their start and ``epsilon`` throughout.
+    transforms at ``derivative_epsilon`` (default ``epsilon``; ``stipple sphere`` asks for
+    ``stipple.torus.DERIVATIVE_EPSILON``, single precision, as ``stipple torus`` does). Designs and the Sobolev
+    kernel keep their bandwidth, the plain metric, their start and ``epsilon`` throughout (``derivative_epsilon``
+    is ignored there).
     """
     density = as_density(weights, lon0)
     n_points = check_count(n_points)
@@ -194,8 +195,8 @@ def sphere_problem(
     # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
     check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
-    if derivative_epsilon is None:
-        derivative_epsilon = DERIVATIVE_EPSILON if picture else epsilon
+    if derivative_epsilon is None or not picture:
+        derivative_epsilon = epsilon
     accuracy = (epsilon, derivative_accuracy(epsilon, derivative_epsilon))
     objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy)
     scaled = picture and precondition
@@ -272,6 +273,7 @@ def halftone_sphere(
     threads=None,
     epsilon=None,
     near_field=None,
+    derivative_epsilon=None,
     **options,
 ):
     """Place ``n_points`` dots on the unit sphere so that they reproduce a density.
@@ -297,6 +299,9 @@ def halftone_sphere(
     epsilon : float, optional
         Requested accuracy of the transforms (default 1e-10; 1e-12 with the design term, where ``tol=1e-6`` is
         also worth passing, as the CLI does).
+    derivative_epsilon : float, optional
+        Accuracy of a map's derivative transforms (default ``epsilon``; ``stipple sphere`` passes
+        ``stipple.torus.DERIVATIVE_EPSILON``, single precision: see ``sphere_problem``).
     near_field : bool, optional
         Minimise the untruncated distance discrepancy with its short range summed over neighbouring pairs
         (default for the distance kernel); False gives the paper's bandlimited ``E_N``.
@@ -309,7 +314,15 @@ def halftone_sphere(
         ``points`` as unit vectors of shape (M, 3); ``stipple.sphere.lon_lat`` converts them.
     """
     problem = sphere_problem(
-        weights, n_points, bandwidth, lon0=lon0, kernel=kernel, threads=threads, epsilon=epsilon, near_field=near_field
+        weights,
+        n_points,
+        bandwidth,
+        lon0=lon0,
+        kernel=kernel,
+        threads=threads,
+        epsilon=epsilon,
+        near_field=near_field,
+        derivative_epsilon=derivative_epsilon,
     )
     return run(problem, **options)
 
@@ -348,11 +361,12 @@ def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_rang
     """The density of a map (``-`` is stdin), a built-in name (``builtin:NAME``) or, with ``uniform``, w ≡ 1.
 
     ``invert``, ``gamma`` and ``value_range`` transform a map's or an image's values; given with a built-in
-    density or ``uniform`` they are refused (they would be ignored)."""
+    density they are refused (they would be ignored), and so are ``gamma`` and ``value_range`` with ``uniform``
+    (whose ``--invert`` only draws white dots on black)."""
     if uniform:
         if source is not None:
             raise StippleError("give either MAP or --uniform, not both")
-        _refuse_transfer("--uniform", invert, gamma, value_range)
+        _refuse_transfer("--uniform", False, gamma, value_range)
         return BUILTINS["uniform"]
     if source is None:
         raise MissingInput("missing MAP (a .npy map, an image, builtin:NAME) or --uniform")
@@ -370,4 +384,5 @@ def _refuse_transfer(what, invert, gamma, value_range):
     given = [name for name, on in (("--invert", invert), ("--gamma", gamma != 1.0), ("--range", value_range)) if on]
     if given:
         verb = "transforms" if len(given) == 1 else "transform"
-        raise StippleError(f"{', '.join(given)} {verb} a map's or an image's values, not {what}")
+        colours = " (--background and --color draw white dots on black)" if invert else ""
+        raise StippleError(f"{', '.join(given)} {verb} a map's or an image's values, not {what}{colours}")

@@ -390,7 +390,7 @@ class SphereFourier:
         self.multiplicity = np.where(alm_degrees_orders(lmax)[1] == 0, 1.0, 2.0)
         self.counts = {"synthesis": 0, "adjoint": 0, "set_points": 0}
 
-    def _options(self, adjoint=False, derivative=True):
+    def _options(self, adjoint=False, derivative=False):
         threads = self.adjoint_threads if adjoint else self.threads
         epsilon = self.derivative_epsilon if derivative else self.epsilon
         return dict(lmax=self.lmax, loc=self._loc, epsilon=epsilon, nthreads=threads)
@@ -404,8 +404,7 @@ class SphereFourier:
 
     def analysis(self):
         self.counts["adjoint"] += 1
-        options = self._options(adjoint=True, derivative=False)
-        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **options)[0]
+        return self._sht.adjoint_synthesis_general(map=self._ones, spin=0, **self._options(adjoint=True))[0]
 
     def gradient_synthesis(self, coeffs):
         e_theta, e_phi = self._frame
@@ -413,7 +412,9 @@ class SphereFourier:
         for alm in coeffs:
             self.counts["synthesis"] += 1
             alm = alm.astype(self._complex, copy=False)[None]
-            v_theta, v_phi = self._sht.synthesis_general(alm=alm, spin=1, mode="DERIV1", **self._options())
+            v_theta, v_phi = self._sht.synthesis_general(
+                alm=alm, spin=1, mode="DERIV1", **self._options(derivative=True)
+            )
             fields.append(v_theta[:, None] * e_theta + v_phi[:, None] * e_phi)
         return fields
 
@@ -435,7 +436,7 @@ class SphereFourier:
             self.counts["adjoint"] += 1
             components = np.stack([np.sum(v * e_theta, axis=1), np.sum(v * e_phi, axis=1)]).astype(self._real)
             alm = self._sht.adjoint_synthesis_general(
-                map=components, spin=1, mode="DERIV1", **self._options(adjoint=True)
+                map=components, spin=1, mode="DERIV1", **self._options(adjoint=True, derivative=True)
             )
             results.append(alm[0].astype(np.complex128, copy=False))
         return results

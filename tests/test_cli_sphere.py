@@ -80,6 +80,7 @@ def test_uniform_and_builtins():
         (["sphere", "builtin:nope"], "unknown built-in density"),
         (["sphere", "builtin:gaussians", "--invert"], "--invert transforms a map's or an image's values, not builtin"),
         (["sphere", "--uniform", "--gamma", 3, "--range", 0, 1], "--gamma, --range transform a map's or an image's"),
+        (["sphere", "--uniform", "--invert", "--gamma", 3], "--gamma transforms a map's or an image's values, not"),
         (["sphere", "--uniform", "--kernel", "gauss"], "kernel must be"),
         (["sphere", "--uniform", "--view", "10"], "view must be LON,LAT"),
         (["sphere", "--uniform", "-N", 0], "bandwidth (degree) must be an integer"),
@@ -91,6 +92,13 @@ def test_sphere_bad_options(args, message):
     assert message in result.output
 
 
+def test_uniform_with_invert_draws_white_dots_on_black(tmp_path):
+    """--invert has no values to invert on the uniform sphere, but it still chooses the colours."""
+    run(["sphere", "--uniform", "--invert", "-M", 50, "-N", 4, "--iterations", 2, "-q", "-o", tmp_path / "u.svg"])
+    svg = (tmp_path / "u.svg").read_text()
+    assert 'fill="#ffffff"' in svg and "#000000" in svg
+
+
 def test_a_missing_map_or_input_is_bad_usage(tmp_path):
     """Exit code 2, as a missing IMAGE of ``stipple torus`` (docs/errors.md), for the sphere's MAP and for the
     INPUT that ``evaluate`` needs for a torus's or an ink layer's points."""
@@ -98,9 +106,11 @@ def test_a_missing_map_or_input_is_bad_usage(tmp_path):
     assert result.exit_code == 2 and "missing MAP" in result.output
     (tmp_path / "p.csv").write_text("x,y\n1,2\n3,4\n")
     (tmp_path / "l.csv").write_text("x,y,class\n1,2,c\n3,4,m\n")
-    for points in ("p.csv", "l.csv"):
-        result = run(["evaluate", tmp_path / points])
-        assert result.exit_code == 2 and "missing INPUT" in result.output
+    (tmp_path / "s.csv").write_text("lon,lat\n10,20\n30,-40\n")
+    Image.new("L", (16, 16), 255).save(tmp_path / "d.png")
+    for arguments in (["p.csv"], ["l.csv"], ["s.csv"], ["p.csv", "--line"], ["d.png"]):
+        result = run(["evaluate", tmp_path / arguments[0], *arguments[1:]])
+        assert result.exit_code == 2 and "missing INPUT" in result.output, arguments
 
 
 def test_map_and_uniform_together_is_an_error(map_path):
@@ -175,3 +185,18 @@ def test_the_equirect_picture_lies_over_its_map_and_follows_view(tmp_path):
     assert own[0] > 2 * max(own[1:]), own
     centred = quarters("--view", "0,0")  # lon 0 in the middle: the block in the third quarter
     assert centred[2] > 2 * max(centred[0], centred[1], centred[3]), centred
+
+
+def test_the_command_solves_with_single_precision_derivatives(map_path, tmp_path):
+    """``stipple sphere`` asks for ``DERIVATIVE_EPSILON`` (the library's default is ``epsilon``): its points are
+    the library's run with it, not without."""
+    from stipple.sphere import halftone_sphere, lon_lat
+    from stipple.torus import DERIVATIVE_EPSILON
+
+    common = dict(threads=1, seed=3, iterations=8)
+    run(["sphere", map_path, "-M", 300, "--threads", 1, "--seed", 3, "--iterations", 8, "-q", "-o", tmp_path / "a.csv"])
+    drawn = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
+    single = lon_lat(halftone_sphere(str(map_path), 300, derivative_epsilon=DERIVATIVE_EPSILON, **common).points)
+    double = lon_lat(halftone_sphere(str(map_path), 300, **common).points)
+    np.testing.assert_allclose(drawn, np.column_stack(single), atol=1e-12)
+    assert np.abs(drawn - np.column_stack(double)).max() > 1e-9

@@ -108,3 +108,6 @@ def test_range_and_levels_are_refused_where_they_would_be_ignored(tmp_path):
     # A map that --range leaves at zero was called "the image is blank (all white)".
     with pytest.raises(StippleError, match="no density is left under --range 100 200: every value is at or below 100"):
         load_density(tmp_path / "m.npy", value_range=(100.0, 200.0))
+    assert np.all(load_density(tmp_path / "m.npy", value_range=(100.0, 200.0), invert=True) == 1.0)
+    with pytest.raises(StippleError, match="blank under --invert"):
+        load_density(tmp_path / "m.npy", value_range=(-10.0, -5.0), invert=True)

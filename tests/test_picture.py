@@ -8,6 +8,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from stipple.cli import main
+from stipple.io.images import load_density
 from stipple.measures.picture import area_average, floyd_steinberg, measure_picture, on_grid
 
 pytest.importorskip("skimage")
@@ -161,6 +162,18 @@ def test_evaluate_reports_a_pictures_measures_as_json(tmp_path):
     assert report["floyd_steinberg"]["dots"] > 0
     text = evaluate(big, source)
     assert text.exit_code == 0 and "sigma 2 px: luminance RMSE 0.04" in text.output
+
+
+def test_evaluate_with_invert_measures_a_baseline_of_white_dots(tmp_path):
+    """``--invert --floyd-steinberg M``: the baseline's M dots are white, as the picture's (it dithered M black
+    ones, overstating its error on a dark input)."""
+    source = save(tmp_path / "in.png", ramp(48, 72, 0.05, 0.4))
+    report = json.loads(evaluate(source, source, "--invert", "--floyd-steinberg", "300", "--json", "-").output)
+    reference = load_density(source, invert=True)  # the picture's light, white dots on black: w = u
+    picture, dots = floyd_steinberg(reference, 300, light_dots=True)
+    assert report["floyd_steinberg"]["dots"] == dots
+    expected = measure_picture(reference, picture, sigmas=(2.0, 4.0))
+    assert [m["rmse"] for m in report["floyd_steinberg"]["measures"]] == pytest.approx([m.rmse for m in expected])
 
 
 def test_evaluate_measures_the_tone_the_run_was_asked_for(tmp_path):

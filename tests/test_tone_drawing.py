@@ -71,6 +71,8 @@ def test_tone_style_draws_every_dot_where_it_was_placed_or_across_the_edge(camer
     drawn = np.array(found, dtype=float)
     placed = np.loadtxt(camera / "tone.csv", delimiter=",", skiprows=1)
     assert "tone-true radii" in svg and len(drawn) == 3000
+    copies = len(re.findall(r'<circle [^>]*class="copy"', svg))
+    assert copies > 0 and f"and {copies} copies of those crossing an edge" in svg  # the note counts them
     wrapped = np.mod(drawn[:, :2], 128.0)
     distance, dot = cKDTree(placed, boxsize=128.0 + 1e-9).query(wrapped)
     assert np.all(distance < 2e-4)  # the SVG's 4 decimals

@@ -515,3 +515,16 @@ def test_range_is_refused_for_a_video(tmp_path):
     source = frames_folder(tmp_path / "in", moving_disc(2))
     result = video(source, "-M", COUNT, "--range", "0", "1", "-o", tmp_path / "d.csv")
     assert result.exit_code == 1 and "--range is for .npy maps" in result.output
+
+
+def test_levels_auto_takes_the_stills_rule_on_the_first_frame(tmp_path):
+    """``--levels auto`` is ``auto_levels`` of the first frame, as for a still: a page with one small mark (one gray
+    at both percentiles) was refused with a message about BLACK,WHITE."""
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    page = np.full((32, 48), 247, dtype=np.uint8)
+    page[10:13, 20:23] = 13
+    for index in range(2):
+        Image.fromarray(page).save(folder / f"{index}.png")
+    result = video(folder, "-M", 60, "--levels", "auto", "--iterations", 2, "-o", tmp_path / "v.csv")
+    assert result.exit_code == 0, result.output

@@ -272,8 +272,10 @@ def evaluate_picture(picture_source, input_source, json_path, picture, options, 
     from ..measures.reports import format_picture_report, picture_report
 
     try:
-        if input_source is None or options["uniform"]:
-            raise StippleError("a picture is measured against the INPUT it was drawn from")
+        if input_source is None:
+            raise MissingInput("missing INPUT: a picture is measured against the image it was drawn from")
+        if options["uniform"]:
+            raise StippleError("a picture is measured against the INPUT it was drawn from, not --uniform")
         if point_only:
             raise StippleError("--spectrum, --bandwidth and --line are for points, not pictures")
         check_extension("--json", json_path, ".json")
@@ -295,6 +297,8 @@ def evaluate_picture(picture_source, input_source, json_path, picture, options, 
             if json_path is not None:
                 files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
             commit_outputs(files)
+    except MissingInput as error:
+        raise click.UsageError(str(error)) from None
     except (StippleError, ValueError) as error:
         raise click.ClickException(str(error)) from None
 

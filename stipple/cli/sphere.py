@@ -61,6 +61,7 @@ def sphere(ctx, map_source, **options):
     from ..pipelines.pen import sphere_pen_density
     from ..render.dots import sphere_canvas
     from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
+    from ..torus import DERIVATIVE_EPSILON
 
     started = time.perf_counter()
     map_source = resolve_input(ctx, map_source)
@@ -90,6 +91,7 @@ def sphere(ctx, map_source, **options):
                 threads=options["threads"],
                 epsilon=options["epsilon"],
                 near_field=options["near_field"],
+                derivative_epsilon=DERIVATIVE_EPSILON,
             )
             if problem.settings["kernel"].startswith("distance+design") and is_default(ctx, "tol"):
                 options["tol"] = DESIGN_TOL

@@ -45,7 +45,8 @@ from .recipes import colour_recipe, run_pipeline, torus_recipe
     "--levels",
     default=None,
     help="Images: gray values BLACK,WHITE in [0, 1] stretched to black and white before stippling, or 'auto' "
-    "(the 0.5th and 99.5th percentiles): a faint document's strokes get the full range (docs/picture.md).",
+    "(the 0.5th and 99.5th percentiles, or the extremes where those would clip a spot): a faint document's strokes "
+    "get the full range (docs/picture.md).",
 )
 @palette_options(None)
 @click.pass_context

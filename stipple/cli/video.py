@@ -65,7 +65,7 @@ DEFAULT_FPS = 24.0
     "--levels",
     default=None,
     help="Gray values BLACK,WHITE in [0, 1] stretched to black and white before stippling, or 'auto' (the first "
-    "frame's 0.5th and 99.5th percentiles, kept for every frame).",
+    "frame's 0.5th and 99.5th percentiles, or its extremes where those would clip a spot; kept for every frame).",
 )
 @palette_options(None)
 @click.pass_context

@@ -204,11 +204,6 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
         if levels is not None and strict:
             raise StippleError(f"{name}: --levels is for images; a .npy map is stretched by --range")
         values = rescale(check_grid(load_array(data, name), name), value_range, name)
-        if value_range is not None and not np.any(values > 0):
-            raise StippleError(
-                f"{name}: no density is left under --range {value_range[0]:g} {value_range[1]:g}: every value is "
-                f"at or below {value_range[0]:g}"
-            )
     else:
         if value_range is not None and strict:
             raise StippleError(f"{name}: --range is for .npy maps; an image's gray values are stretched by --levels")
@@ -220,6 +215,12 @@ def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=No
                 "its white point (a lower WHITE, or --levels auto, keeps the image)"
             )
     density = _transfer(values, invert, gamma)
+    if value_range is not None and not np.any(density > 0):
+        # (--invert's own check names an all-zero density under it.)
+        low, high = value_range
+        raise StippleError(
+            f"{name}: no density is left under --range {low:g} {high:g}: every value is at or below {low:g}"
+        )
     if gamma != 1.0 and np.any(values > 0) and not np.any(density > 0):
         raise StippleError(
             f"{name}: no ink is left under --gamma {gamma:g}: every darkness rounds to 0 (try a smaller one)"

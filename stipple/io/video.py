@@ -20,7 +20,7 @@ from PIL import Image
 from ..errors import StippleError
 from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import image_colour, image_density, load_colour, load_density
+from .images import auto_levels, image_colour, image_density, load_colour, load_density
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
@@ -59,7 +59,11 @@ class FrameSource:
         """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0; ``levels`` as
         for ``load_density``, "auto" the first frame's for every frame (a stretch changing by frame would flicker)."""
         if levels == "auto":
-            levels = tuple(np.percentile(1 - next(self._frames(lambda load: load(False, 1, None)))[1], [0.5, 99.5]))
+            levels = auto_levels(1 - next(self._frames(lambda load: load(False, 1, None)))[1])
+            if not levels[0] < levels[1]:
+                raise StippleError(
+                    f"--levels auto: the first frame has one gray value ({levels[0]:.3g}); nothing to stretch"
+                )
         yield from self._frames(lambda load: load(invert, gamma, levels))
 
     def colours(self):

@@ -45,7 +45,9 @@ def evaluation_report(
 
 def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
     """The report of ``stipple evaluate --line``: E_N of the vertices, length, segments, the drawn line's PSNR."""
-    if domain != "torus" or input_source is None:
+    if input_source is None:
+        raise MissingInput("missing INPUT: --line measures the vertices against the image they were drawn from")
+    if domain != "torus":
         raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
     weights = load_input(input_source, **image_transfer(options))
     problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
@@ -61,6 +63,8 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
         problem = torus_problem(weights, len(points), bandwidth, **MEASURE_OPTIONS)
         return {**evaluate_torus(problem, unit, weights), **outside(points, weights.shape)}
+    if input_source is None and not options["uniform"]:
+        raise MissingInput("missing INPUT: the map the points were made from, builtin:NAME or --uniform")
     density = sphere_density(
         input_source,
         uniform=options["uniform"],
