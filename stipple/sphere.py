@@ -20,7 +20,7 @@ from .halftone import (
     peak_ratio,
     run,
 )
-from .io.images import load_density, load_input
+from .io.images import given_transfer, load_density, load_input
 from .kernels import NearKernel, chord_profile, sphere_kernel
 from .manifolds import ScaledSphere, Sphere
 from .multilevel import split_sphere_points
@@ -381,7 +381,7 @@ def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_rang
 
 def _refuse_transfer(what, invert, gamma, value_range):
     """One line naming the map options given with a density that has no map values to transform."""
-    given = [name for name, on in (("--invert", invert), ("--gamma", gamma != 1.0), ("--range", value_range)) if on]
+    given = given_transfer({"invert": invert, "gamma": gamma, "value_range": value_range})
     if given:
         verb = "transforms" if len(given) == 1 else "transform"
         colours = " (--background and --color draw white dots on black)" if invert else ""

@@ -312,6 +312,7 @@ def made(tmp_path_factory):
         (["d.svg", "--gamma", "2", "--speed", "3"], "--gamma: not for a DRAWING.svg's plot estimate"),
         (["p.png", "g.png", "--speed", "2"], "--speed: not for a drawn PICTURE.png"),
         (["cp.png", "c.png", "--gamma", "2"], "--gamma: for gray measures; a colour picture"),
+        (["cp.png", "c.png", "--invert"], "--invert: for gray measures; a colour picture"),
         (["p.csv", "g.png", "--lift", "1"], "--lift: not for points"),
         (["p.csv", "g.png", "--kernel", "nosuch"], "--kernel: for sphere points"),
         (["p.csv", "g.png", "--lon0", "10"], "--lon0: for sphere points"),

@@ -494,6 +494,7 @@ def test_sphere_points_measured_against_another_lon0_are_warned_about(tmp_path):
     [
         (["evaluate", "{layered}", "{colour}", "--levels", "0.3,0.7"], "--levels: not for layered CSVs"),
         (["evaluate", "{layered}", "{colour}", "--gamma", "2"], "--gamma: not for layered CSVs"),
+        (["evaluate", "{layered}", "{colour}", "--invert"], "--invert: not for layered CSVs"),
         (["evaluate", "{sphere}", "builtin:gaussians", "--levels", "0.3,0.7"], "--levels is for images"),
         (["colour", "{colour}", "--palette", "gray", "--union-weight", "5", *FAST], "--union-weight is for several"),
         (["video", "{frames}", "--black", "0.3", *FAST], "--black: for runs with --palette"),

@@ -226,7 +226,7 @@ def check_builtin(input_source):
 def check_transfer_applies(points_source, domain, names, options):
     """Refuse the density's transfer options where they would be ignored: a layered CSV is measured against the
     colour image's inks (none of them apply), sphere maps have no --levels."""
-    from ..measures.reports import given_transfer
+    from ..io.images import given_transfer
 
     given = given_transfer(options)
     if names is not None:

@@ -270,6 +270,18 @@ def check_levels(levels):
     return black, white
 
 
+def given_transfer(options):
+    """The transfer options of ``load_density`` that ``options`` sets (``--invert`` on, ``--gamma`` not 1, a
+    ``--range`` or ``--levels``), as the command line names them: the ones to refuse where they would be ignored."""
+    given = {
+        "--invert": bool(options.get("invert")),
+        "--gamma": options.get("gamma") not in (None, 1.0),
+        "--range": options.get("value_range") is not None,
+        "--levels": options.get("levels") is not None,
+    }
+    return [flag for flag, on in given.items() if on]
+
+
 def check_load_options(*, invert=False, gamma=1.0, value_range=None, levels=None, strict=True):
     """Raise if a setting of ``load_density`` is out of range (checked before any file is read)."""
     _check_gamma(gamma)

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..colour import check_layer_names, parse_palette, separate
 from ..errors import MissingInput, StippleError
-from ..io.images import NPY_MAGIC, load_colour, load_density, load_input
+from ..io.images import NPY_MAGIC, given_transfer, load_colour, load_density, load_input
 from ..io.sources import STDIN_NAME, read_source, source_or_stdin
 from ..line.problem import line_problem
 from ..multiclass import class_bandwidth
@@ -164,16 +164,6 @@ def _check_sigmas(sigmas, shape):
             raise StippleError(
                 f"sigma must be in (0, {max(shape)}] input pixels (the input's longer side), not {sigma:g}"
             )
-
-
-# The density's transfer options, as the command line names them, and their keywords here.
-TRANSFER_FLAGS = (("--invert", "invert"), ("--gamma", "gamma"), ("--range", "value_range"), ("--levels", "levels"))
-
-
-def given_transfer(options):
-    """The transfer options ``options`` sets away from doing nothing (``--invert`` on, ``--gamma`` not 1, a
-    ``--range`` or ``--levels``), as the command line names them."""
-    return [flag for flag, key in TRANSFER_FLAGS if options.get(key) not in (None, False, 1.0)]
 
 
 def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, inset=0.0, dots=None, **options):
