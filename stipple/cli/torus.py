@@ -102,7 +102,7 @@ def tone_hints(weights, options):
         return
     import numpy as np
 
-    from ..io.images import auto_levels
+    from ..io.images import clips_a_feature
 
     given_count_hint(weights, options)
     if options["levels"] is not None or options["invert"]:
@@ -111,7 +111,7 @@ def tone_hints(weights, options):
     low, high = np.percentile(weights, [0.5, 99.5])
     # A page of one gray with small marks (the same value at both percentiles) has nothing for --levels auto; a
     # spot on a plain page (the levels are the extremes there) is no faint image.
-    if low < high and high - low < FAINT_SPAN and auto_levels(weights) == (low, high):
+    if low < high and high - low < FAINT_SPAN and not clips_a_feature(weights, low, high):
         click.echo(
             f"stipple: note: the image's gray values span only {high - low:.0%} of the range; drawn as they are "
             "(--levels auto stretches them to black and white: docs/picture.md)",

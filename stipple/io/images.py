@@ -240,24 +240,29 @@ def stretch_levels(gray, levels):
         return gray
     if levels == "auto":
         black, white = auto_levels(gray)
-        if not black < white:
-            raise StippleError(f"--levels auto: the image has one gray value ({black:.3g}); nothing to stretch")
     else:
         black, white = check_levels(levels)
     return np.clip((gray - black) / (white - black), 0.0, 1.0)
 
 
-def auto_levels(values):
-    """``(low, high)`` that ``--levels auto`` stretches to 0 and 1: the 0.5th and 99.5th percentiles, which leave
-    out a scan's specks and noise, unless what lies beyond them differs from the rest more than the rest varies
-    within them (a small dark spot on a plain page: the percentiles would clip the spot and widen it to a black
-    disc); then the smallest and largest values."""
-    low, high = np.percentile(values, [0.5, 99.5])
+def auto_levels(gray, what="the image"):
+    """``(black, white)`` that ``--levels auto`` stretches to 0 and 1: the 0.5th and 99.5th percentiles, which
+    leave out a scan's specks and noise, or the smallest and largest values where the percentiles would clip a
+    feature (``clips_a_feature``); a StippleError naming ``what`` where ``gray`` has one value."""
+    low, high = np.percentile(gray, [0.5, 99.5])
+    if clips_a_feature(gray, low, high):
+        low, high = np.min(gray), np.max(gray)
+    if not low < high:
+        raise StippleError(f"--levels auto: {what} has one gray value ({low:.3g}); nothing to stretch")
+    return float(low), float(high)
+
+
+def clips_a_feature(values, low, high):
+    """Whether what lies beyond ``[low, high]`` differs from the rest more than the rest varies within it: a small
+    dark spot on a plain page, which percentiles would clip and widen to a black disc."""
     beyond = np.sum(np.maximum(values - high, 0.0)) + np.sum(np.maximum(low - values, 0.0))
     within = np.clip(values, low, high)
-    if beyond > np.sum(np.abs(within - np.median(within))):
-        return float(np.min(values)), float(np.max(values))
-    return float(low), float(high)
+    return bool(beyond > np.sum(np.abs(within - np.median(within))))
 
 
 def check_levels(levels):

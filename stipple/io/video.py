@@ -59,11 +59,7 @@ class FrameSource:
         """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0; ``levels`` as
         for ``load_density``, "auto" the first frame's for every frame (a stretch changing by frame would flicker)."""
         if levels == "auto":
-            levels = auto_levels(1 - next(self._frames(lambda load: load(False, 1, None)))[1])
-            if not levels[0] < levels[1]:
-                raise StippleError(
-                    f"--levels auto: the first frame has one gray value ({levels[0]:.3g}); nothing to stretch"
-                )
+            levels = auto_levels(1 - next(self._frames(lambda load: load(False, 1, None)))[1], "the first frame")
         yield from self._frames(lambda load: load(invert, gamma, levels))
 
     def colours(self):
