@@ -195,9 +195,8 @@ def sphere_problem(
     # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
     check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
-    if derivative_epsilon is None or not picture:
-        derivative_epsilon = epsilon
-    accuracy = (epsilon, derivative_accuracy(epsilon, derivative_epsilon))
+    derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon if picture else None)
+    accuracy = (epsilon, derivative_epsilon)
     objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy)
     scaled = picture and precondition
     factor_at = partial(density_at, stiffness_map(density, n_points)) if scaled else None
