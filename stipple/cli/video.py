@@ -139,7 +139,7 @@ def video_settings(options, shape, draw):
     the drawing's settings: pen dots are placed by the darkness clipped at the pen's reach)."""
     from functools import partial
 
-    from ..colour import check_palette_extras, check_union_weight, parse_palette
+    from ..colour import check_palette_extras, parse_palette
     from ..halftone import check_integer
     from ..pipelines.inputs import read_torus_init
     from ..pipelines.pen import placement_density
@@ -148,7 +148,6 @@ def video_settings(options, shape, draw):
     check_integer("seed", options["seed"], 0, 2**63 - 1)
     check_palette_extras(options["palette"], options["black"], options["union_weight"])
     palette = None if options["palette"] is None else parse_palette(options["palette"])
-    check_union_weight(options["union_weight"])
     return VideoSettings(
         n_points=options["n_points"],
         bandwidth=options["bandwidth"],
