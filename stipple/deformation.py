@@ -12,9 +12,10 @@ arrangement (the high frequencies, which the plain ``E_N`` of a low bandwidth ca
 
 import numpy as np
 
+from .nufft import make_nufft
 from .optimize import minimize
 from .torus import scaled_bandwidths
-from .transforms import make_nufft, torus_modes
+from .transforms import torus_modes
 
 # The displacement field's transforms are small: ducc0 on one thread, whatever the objective's backend (the pool's
 # overhead at every call would exceed the work).

@@ -1,6 +1,6 @@
 """The torus transforms on an NVIDIA GPU through ``cufinufft`` (the ``gpu`` extra: cufinufft and CuPy).
 
-``CufinufftNufft`` has the interface of ``stipple.transforms.Ducc0Nufft`` (``set_points``, ``type1``, ``type2`` on
+``CufinufftNufft`` has the interface of ``stipple.nufft.Ducc0Nufft`` (``set_points``, ``type1``, ``type2`` on
 NumPy arrays, centred ``(N1+1, N2+1)`` mode grids), so the objective and CG run unchanged on the CPU and only the
 transforms move: each call copies its values to the GPU and its result back. The GPU's type-1 spreading adds with
 atomic operations in no fixed order, so two runs with the same seed agree to rounding, not bit for bit. CuPy's

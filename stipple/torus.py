@@ -27,10 +27,11 @@ from .kernels import NearKernel, ball_kernel, ball_profile
 from .manifolds import ScaledTorus, Torus
 from .multilevel import split_points
 from .nearfield import NearField, TorusPairs
+from .nufft import BACKENDS, make_nufft
 from .objective import Discrepancy, SumObjective
 from .sampling import sample_image, stratified_sample
 from .spread import spread_close
-from .transforms import BACKENDS, TorusFourier, centred_modes, make_nufft
+from .transforms import TorusFourier, centred_modes
 
 # Transform accuracy: at M = 10^6 the energy after 8 CG iterations moved by 4e-9 of itself against 1e-9, at
 # 10 % less time per iteration (README, Defaults).
@@ -357,7 +358,7 @@ def halftone_torus(
         NUFFT library; "cufinufft" runs the transforms on an NVIDIA GPU (``stipple.gpu``).
     threads : int, optional
         Threads for the transforms (default: all CPUs). On the CPU the same thread count gives the same points
-        bit for bit (see ``stipple.transforms.ResidueSplitNufft``); on the GPU they agree to rounding.
+        bit for bit (see ``stipple.nufft.ResidueSplitNufft``); on the GPU they agree to rounding.
     epsilon : float
         Requested accuracy of the transforms.
     hessian : {"gauss-newton", "full"}

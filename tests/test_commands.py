@@ -51,7 +51,7 @@ def test_a_command_offers_only_the_options_that_act_on_it(command, option):
 
 def test_the_help_defaults_are_the_librarys():
     """``stipple.cli.defaults`` repeats the library's choices so that --help needs no numpy: each must match."""
-    from stipple import halftone, optimize, transforms, video
+    from stipple import halftone, nufft, optimize, video
     from stipple.cli import defaults
     from stipple.line import LINE_ITERATIONS
     from stipple.measures import plot_estimate
@@ -59,7 +59,7 @@ def test_the_help_defaults_are_the_librarys():
 
     assert defaults.BETAS == optimize.BETAS and defaults.SETTLE_WINDOW == optimize.SETTLE_WINDOW
     assert defaults.INITS == halftone.INITS and defaults.DEFAULT_SETTLE == halftone.DEFAULT_SETTLE
-    assert defaults.BACKENDS == transforms.BACKENDS
+    assert defaults.BACKENDS == nufft.BACKENDS
     assert defaults.FRAME_ITERATIONS == video.FRAME_ITERATIONS
     assert defaults.LINE_ITERATIONS == LINE_ITERATIONS
     assert defaults.DEFAULT_SPEED == plot_estimate.DEFAULT_SPEED

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from stipple.errors import StippleError
-from stipple.transforms import make_nufft
+from stipple.nufft import make_nufft
 
 
 @pytest.fixture

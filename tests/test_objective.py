@@ -5,8 +5,8 @@ import pytest
 from conftest import backend_params, gradient_taylor_slope, hessian_taylor_slope
 
 from stipple.manifolds import Torus
+from stipple.nufft import BACKENDS
 from stipple.torus import torus_problem
-from stipple.transforms import BACKENDS
 
 STEPS = np.logspace(-2.5, -4, 6)
 

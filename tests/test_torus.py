@@ -5,6 +5,7 @@ from scipy.special import roots_legendre
 
 from stipple.errors import StippleError
 from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
+from stipple.nufft import BACKENDS
 from stipple.optimize import SETTLE_WINDOW
 from stipple.torus import (
     DEFAULT_EPSILON,
@@ -19,7 +20,7 @@ from stipple.torus import (
     torus_problem,
     torus_scale,
 )
-from stipple.transforms import BACKENDS, torus_modes
+from stipple.transforms import torus_modes
 
 
 def brute_force_coefficients(weights, bandwidths):

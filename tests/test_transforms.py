@@ -2,17 +2,10 @@ import numpy as np
 import pytest
 from conftest import backend_params
 
-import stipple.transforms
+import stipple.nufft
+from stipple.nufft import BACKENDS, Ducc0Nufft, FinufftNufft, ResidueSplitNufft, make_nufft
 from stipple.precision import SINGLE_PRECISION_EPSILON, precision
-from stipple.transforms import (
-    BACKENDS,
-    Ducc0Nufft,
-    FinufftNufft,
-    ResidueSplitNufft,
-    TorusFourier,
-    make_nufft,
-    torus_modes,
-)
+from stipple.transforms import TorusFourier, torus_modes
 
 
 def direct_matrix(points, shape):
@@ -100,7 +93,7 @@ def test_packed_gradient_transforms_match_direct_formulas(rng):
 def test_analysis_mirrors_its_half_grid_into_the_direct_sums(monkeypatch, backend, threads, shape, rng):
     """``analysis`` transforms the rows n1 >= 0 (N1/2 even and odd: the half grid gets an extra row or not) and
     mirrors them; with 2 threads both CPU grids take the residue split."""
-    monkeypatch.setattr(stipple.transforms, "MIN_ROWS_PER_THREAD", 1)
+    monkeypatch.setattr(stipple.nufft, "MIN_ROWS_PER_THREAD", 1)
     points = rng.random((50, 2)) * 3 - 1
     fourier = TorusFourier(make_nufft(backend, shape, 1e-12, threads))
     assert fourier.half_nufft.shape[0] % 2 == 1 and fourier.half_nufft.shape[0] >= shape[0] // 2 + 1
@@ -127,7 +120,7 @@ def test_single_precision_transforms_against_direct_sums(monkeypatch, backend, t
     """At an epsilon of 1e-4 the transforms run in single precision and still match direct sums to that accuracy
     (relative to the sums of magnitudes, the libraries' bound), also for points outside [0, 1) and on the CPU's
     residue split (2 threads); results come back in double precision."""
-    monkeypatch.setattr(stipple.transforms, "MIN_ROWS_PER_THREAD", 1)
+    monkeypatch.setattr(stipple.nufft, "MIN_ROWS_PER_THREAD", 1)
     shape = (21, 13)
     points = rng.random((200, 2)) * 3 - 1
     nufft = make_nufft(backend, shape, 1e-4, threads)

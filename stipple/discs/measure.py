@@ -108,7 +108,7 @@ class DiscDiscrepancy:
     Parameters
     ----------
     nufft : Ducc0Nufft, FinufftNufft or ResidueSplitNufft
-        Transforms on the centred ``(N1+1, N2+1)`` mode grid (``stipple.transforms.make_nufft``).
+        Transforms on the centred ``(N1+1, N2+1)`` mode grid (``stipple.nufft.make_nufft``).
     kernel : numpy.ndarray
         ``K_n`` on that grid, ``K_0`` included (the mass term).
     target : numpy.ndarray

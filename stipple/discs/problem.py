@@ -54,6 +54,7 @@ from ..halftone import (
 )
 from ..io.images import load_density
 from ..kernels import ball_kernel
+from ..nufft import BACKENDS, make_nufft
 from ..optimize import BETAS, minimize
 from ..sampling import stratified_sample
 from ..torus import (
@@ -65,7 +66,6 @@ from ..torus import (
     torus_kernel,
     torus_scale,
 )
-from ..transforms import BACKENDS, make_nufft
 from .measure import (
     DiscDiscrepancy,
     DiscFactors,

@@ -89,8 +89,9 @@ def exact_blurs(weights, points, sigma, threads=1):
     image coefficients and the Gaussian's ``G_n = exp(-2 pi² sigma² |n / size|²)``, over all frequencies up to
     where ``G`` falls below 1e-8, and evaluated at the pixel centres by NUFFTs. Returns two ``(H, W)`` arrays.
     """
+    from ..nufft import make_nufft
     from ..torus import image_coefficients
-    from ..transforms import make_nufft, torus_modes
+    from ..transforms import torus_modes
 
     rows, columns = weights.shape
     cycles = max(1.0, 0.97 / sigma)  # cycles per pixel beyond which exp(-2 pi² sigma² f²) < 1e-8

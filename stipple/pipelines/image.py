@@ -7,8 +7,8 @@ from ..errors import StippleError
 from ..halftone import check_bandwidth, check_count, check_epsilon, check_run_options, check_threads, run
 from ..io.images import check_load_options, load_input
 from ..io.png import check_png_outputs
+from ..nufft import BACKENDS
 from ..torus import DERIVATIVE_EPSILON, torus_problem
-from ..transforms import BACKENDS
 from .inputs import read_torus_init
 from .outputs import torus_files
 from .pen import counted_recipe, order_kind, ordered_points, placement_density
