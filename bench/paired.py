@@ -12,7 +12,10 @@ untruncated energy, exact-blur PSNR at sigma 1, 2, 4 px, the nearest-neighbour r
 drawn picture's luminance RMSE (colour: CIEDE2000) at sigma 4 px. ``--old`` defaults to ``$STIPPLE_OLD``; without
 either, only the new command runs (a fresh clone has no old version). Medians and new/old ratios are in the JSON.
 ``--variant LABEL=OPTIONS`` (repeatable) adds the new command with more options after the case's own, e.g.
-``gpu=--backend cufinufft``, in the same alternation, with its own ratio to the old.
+``gpu=--backend cufinufft``, in the same alternation, with its own ratio to the old. Every command runs in the
+``--out`` folder: ``python -m stipple`` puts its current directory before ``PYTHONPATH``, so a command such as
+``env PYTHONPATH=/path/to/checkout python -m stipple`` started in another checkout would run that one instead.
+A command's program given as a relative path is made absolute; give other paths in a command absolute.
 """
 
 import argparse
@@ -94,12 +97,12 @@ def cases(inputs):
     }
 
 
-def run_measured(command, timeout):
+def run_measured(command, timeout, cwd=None):
     """Wall seconds, the child's own peak resident memory (``wait4``), return code and stderr of one command."""
     started = time.perf_counter()
     with open(os.devnull, "wb") as devnull, open(os.devnull, "rb") as stdin:
         with tempfile.TemporaryFile() as errors:
-            process = subprocess.Popen(command, stdin=stdin, stdout=devnull, stderr=errors)
+            process = subprocess.Popen(command, stdin=stdin, stdout=devnull, stderr=errors, cwd=cwd)
             deadline = started + timeout
             while True:
                 pid, status, usage = os.wait4(process.pid, os.WNOHANG)
@@ -121,13 +124,13 @@ def iterations_from(stderr):
     return int(match[0]) if match else None
 
 
-def evaluate(new, outputs, source, options):
-    """The new version's measures of one run's outputs."""
+def evaluate(new, outputs, source, options, cwd=None):
+    """The new version's measures of one run's outputs (``stipple evaluate`` started in ``cwd``)."""
     report = {}
     csv = outputs.get("csv")
     if csv is not None and csv.exists():
         text = subprocess.run(
-            [*new, "evaluate", str(csv), str(source), *options, "--json", "-"], capture_output=True, text=True
+            [*new, "evaluate", str(csv), str(source), *options, "--json", "-"], capture_output=True, text=True, cwd=cwd
         )
         report["points"] = json.loads(text.stdout) if text.returncode == 0 else {"error": text.stderr[-500:]}
     png = outputs.get("png")
@@ -136,6 +139,7 @@ def evaluate(new, outputs, source, options):
             [*new, "evaluate", str(png), str(source), "--sigma", "4", "--json", "-"],
             capture_output=True,
             text=True,
+            cwd=cwd,
         )
         report["picture"] = json.loads(text.stdout) if text.returncode == 0 else {"error": text.stderr[-500:]}
     return report
@@ -178,7 +182,7 @@ def run_case(name, spec, versions, repeats, out, timeout):
                 path.unlink(missing_ok=True)
             prefix, suffix = versions[label]
             command = [*prefix, *arguments, *suffix, *sum((["-o", str(p)] for p in paths.values()), [])]
-            record = run_measured(command, timeout)
+            record = run_measured(command, timeout, cwd=out)
             record["iterations"] = iterations_from(record["stderr"])
             record["stderr"] = record["stderr"][-400:]
             runs[label].append(record)
@@ -199,7 +203,7 @@ def run_case(name, spec, versions, repeats, out, timeout):
             "peak_gib": max(item["peak_bytes"] for item in runs[label]) / 2**30,
             "iterations": [item["iterations"] for item in runs[label]],
             "returncodes": [item["returncode"] for item in runs[label]],
-            "quality": summary(evaluate(versions["new"][0], outputs[label], source, evaluate_options)),
+            "quality": summary(evaluate(versions["new"][0], outputs[label], source, evaluate_options, cwd=out)),
         }
     if "old" in versions:
         old = entry["versions"]["old"]
@@ -213,6 +217,15 @@ def run_case(name, spec, versions, repeats, out, timeout):
     return entry
 
 
+def command_words(command):
+    """``command`` split as a shell splits it, its program made absolute if given as a relative path (the commands
+    run in the ``--out`` folder)."""
+    words = shlex.split(command)
+    if words and os.sep in words[0] and not os.path.isabs(words[0]):
+        words[0] = os.path.abspath(words[0])
+    return words
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--old", default=os.environ.get("STIPPLE_OLD"), help="the old version's stipple command")
@@ -224,14 +237,14 @@ def main(argv=None):
     parser.add_argument("--output", default="bench/paired.json")
     parser.add_argument("--variant", action="append", default=[], help="LABEL=OPTIONS: the new command with OPTIONS")
     args = parser.parse_args(argv)
-    out = Path(args.out)
+    out = Path(args.out).resolve()
     specs = cases(make_inputs(out / "inputs"))
-    versions = {"new": (shlex.split(args.new), [])}
+    versions = {"new": (command_words(args.new), [])}
     for variant in args.variant:
         label, _, options = variant.partition("=")
-        versions[label] = (shlex.split(args.new), shlex.split(options))
+        versions[label] = (command_words(args.new), shlex.split(options))
     if args.old:
-        versions = {"old": (shlex.split(args.old), []), **versions}
+        versions = {"old": (command_words(args.old), []), **versions}
     results = {}
     for name in args.cases.split(","):
         results[name] = run_case(name, specs[name], versions, args.repeats, out, args.timeout)

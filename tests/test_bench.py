@@ -1,6 +1,7 @@
 """The benchmark script runs and writes the documented fields (no timing is asserted)."""
 
 import json
+import os
 import runpy
 import sys
 from pathlib import Path
@@ -64,6 +65,27 @@ def test_quality_inputs_have_the_documented_properties(tmp_path):
     unit = np.random.default_rng(1).random((2000, 2))
     crop = np.asarray(quality.torus_crop(unit, made["strip6x1"]))
     assert crop.shape == (quality.CROP_PIXELS,) * 2 and 0 < np.mean(crop < 128) < 0.5
+
+
+def test_paired_commands_run_the_version_named_not_a_checkout_in_the_current_folder(tmp_path, monkeypatch):
+    """``python -m stipple`` puts its current directory first: started beside another checkout's ``stipple`` it
+    would run that one. The commands run in the ``--out`` folder, and a relative program is made absolute."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import paired
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    decoy = tmp_path / "checkout"
+    (decoy / "stipple").mkdir(parents=True)
+    (decoy / "stipple" / "__init__.py").write_text("")
+    (decoy / "stipple" / "__main__.py").write_text("raise SystemExit(3)\n")
+    monkeypatch.chdir(decoy)
+    program = os.path.relpath(sys.executable, decoy)
+    results = paired.main(
+        ["--new", f"{program} -m stipple", "--cases", "smoke", "--repeats", "1", "--out", str(tmp_path / "out")]
+        + ["--output", str(tmp_path / "paired.json")]
+    )
+    assert results["smoke"]["versions"]["new"]["returncodes"] == [0]
 
 
 def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
