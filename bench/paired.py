@@ -14,7 +14,8 @@ either, only the new command runs (a fresh clone has no old version). Medians an
 ``--variant LABEL=OPTIONS`` (repeatable) adds the new command with more options after the case's own, e.g.
 ``gpu=--backend cufinufft``, in the same alternation, with its own ratio to the old. Every command runs in the
 ``--out`` folder: ``python -m stipple`` puts its current directory before ``PYTHONPATH``, so a command such as
-``env PYTHONPATH=/path/to/checkout python -m stipple`` started in another checkout would run that one instead.
+``env PYTHONPATH=/path/to/checkout python -m stipple`` started in another checkout would run that one instead
+(the default ``--new`` names this checkout so).
 A command's program given as a relative path is made absolute; give other paths in a command absolute.
 """
 
@@ -217,6 +218,12 @@ def run_case(name, spec, versions, repeats, out, timeout):
     return entry
 
 
+def this_checkout():
+    """``python -m stipple`` of the checkout that holds this script (the commands start elsewhere, in ``--out``)."""
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    return shlex.join(["env", f"PYTHONPATH={path}", sys.executable, "-m", "stipple"])
+
+
 def command_words(command):
     """``command`` split as a shell splits it, its program made absolute if given as a relative path (the commands
     run in the ``--out`` folder)."""
@@ -229,7 +236,7 @@ def command_words(command):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--old", default=os.environ.get("STIPPLE_OLD"), help="the old version's stipple command")
-    parser.add_argument("--new", default=f"{shlex.quote(sys.executable)} -m stipple")
+    parser.add_argument("--new", default=this_checkout(), help="default: this checkout, with this Python")
     parser.add_argument("--cases", default="portrait,dark,panorama,colour,sphere,million")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--timeout", type=float, default=1800)
@@ -238,6 +245,8 @@ def main(argv=None):
     parser.add_argument("--variant", action="append", default=[], help="LABEL=OPTIONS: the new command with OPTIONS")
     args = parser.parse_args(argv)
     out = Path(args.out).resolve()
+    if (out / "stipple").exists():
+        parser.error(f"--out {out} holds a 'stipple' folder, which python -m stipple would run: choose another")
     specs = cases(make_inputs(out / "inputs"))
     versions = {"new": (command_words(args.new), [])}
     for variant in args.variant:

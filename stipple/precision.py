@@ -1,4 +1,5 @@
-"""The floating-point types of the transforms (``stipple.transforms`` on the CPU, ``stipple.gpu`` on the GPU)."""
+"""The floating-point types of the transforms (``stipple.nufft`` and ``stipple.transforms`` on the CPU,
+``stipple.gpu`` on the GPU)."""
 
 import numpy as np
 

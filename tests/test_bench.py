@@ -82,7 +82,7 @@ def test_paired_commands_run_the_version_named_not_a_checkout_in_the_current_fol
     monkeypatch.chdir(decoy)
     program = os.path.relpath(sys.executable, decoy)
     results = paired.main(
-        ["--new", f"{program} -m stipple", "--cases", "smoke", "--repeats", "1", "--out", str(tmp_path / "out")]
+        ["--new", f"{program} -m stipple", "--cases", "smoke", "--repeats", "1", "--out", str(tmp_path / "a" / "b")]
         + ["--output", str(tmp_path / "paired.json")]
     )
     assert results["smoke"]["versions"]["new"]["returncodes"] == [0]

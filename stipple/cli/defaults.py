@@ -8,7 +8,7 @@ SETTLE_WINDOW = 20
 # stipple.halftone
 INITS = ("stratified", "density", "uniform")
 DEFAULT_SETTLE = 2e-3
-# stipple.transforms
+# stipple.nufft
 BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video
 FRAME_ITERATIONS = 12
