@@ -8,7 +8,7 @@ import click
 from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
-from .options import check_extension, check_longitude, parse_levels, warn_outside
+from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
 from .supervise import guarded_files
 
 
@@ -144,10 +144,8 @@ def evaluate(
             warn_outside(count, report["points"], size, "the measures wrap them around")
             warn_unjudged(report, input_source)
             commit_outputs(report_files(report, json_path, spectrum_path))
-    except MissingInput as error:
-        raise click.UsageError(str(error)) from None
     except StippleError as error:
-        raise click.ClickException(str(error)) from None
+        raise click_error(error) from None
 
 
 def report_files(report, json_path, spectrum_path):
@@ -297,10 +295,8 @@ def evaluate_picture(picture_source, input_source, json_path, picture, options, 
             if json_path is not None:
                 files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
             commit_outputs(files)
-    except MissingInput as error:
-        raise click.UsageError(str(error)) from None
     except (StippleError, ValueError) as error:
-        raise click.ClickException(str(error)) from None
+        raise click_error(error) from None
 
 
 def evaluate_plot(drawing, input_source, json_path, plotter):

@@ -4,10 +4,16 @@ import math
 
 import click
 
-from ..errors import StippleError
+from ..errors import MissingInput, StippleError
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
+
+
+def click_error(error):
+    """The click exception that reports a library error in one line: a missing input is bad usage (exit code 2, as
+    a missing argument), any other error exit code 1."""
+    return (click.UsageError if isinstance(error, MissingInput) else click.ClickException)(str(error))
 
 
 def resolve_input(ctx, given):

@@ -4,10 +4,19 @@ import time
 
 import click
 
-from ..errors import MissingInput, StippleError
+from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import check_longitude, common_options, init_input, is_default, parse_view, render_settings, resolve_input
+from .options import (
+    check_longitude,
+    click_error,
+    common_options,
+    init_input,
+    is_default,
+    parse_view,
+    render_settings,
+    resolve_input,
+)
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 
 
@@ -110,10 +119,8 @@ def sphere(ctx, map_source, **options):
                 **settings,
             )
             write_outputs(options["outputs"], files, options["quiet"])
-    except MissingInput as error:
-        raise click.UsageError(str(error)) from None
     except StippleError as error:
-        raise click.ClickException(str(error)) from None
+        raise click_error(error) from None
     finish(result, stopped_by, options, started)
 
 

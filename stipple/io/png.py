@@ -69,10 +69,11 @@ def default_png_width(count, canvas=(1.0, 1.0)):
     return max(1, min(side, int(TALLEST * side * width / height))) if height > 0 else side
 
 
-def check_png_outputs(formats, canvas, png_width, count):
-    """Before a run: refuse PNG outputs whose canvas (user units ``(width, height)``) would not fit in memory."""
+def check_png_outputs(formats, canvas, png_width, count, layers=2):
+    """Before a run: refuse PNG outputs whose canvas (user units ``(width, height)``) would not fit in memory
+    (``layers`` as for ``check_png_canvas``)."""
     if ".png" in formats:
-        check_png_canvas(canvas, png_width or default_png_width(count, canvas))
+        check_png_canvas(canvas, png_width or default_png_width(count, canvas), layers)
 
 
 def spectrum_plot(frequencies, power, anisotropy, size=(800, 600)):

@@ -8,7 +8,7 @@ import numpy as np
 from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate
 from ..halftone import run
 from ..io.images import load_colour
-from ..io.png import check_png_canvas, default_png_width
+from ..io.png import check_png_outputs
 from ..io.units import parse_colour
 from ..render.pen import pen_order, physical_centres
 from .image import ImageOutputs
@@ -79,11 +79,7 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
     rgb = load_colour(image)
     settings = dict(recipe.problem)
     n_points = settings.pop("n_points")
-    if ".png" in formats:
-        canvas = rgb.shape[1::-1]
-        check_png_canvas(
-            canvas, recipe.draw["png_width"] or default_png_width(n_points, canvas), layers=INK_PICTURE_LAYERS
-        )
+    check_png_outputs(formats, rgb.shape[1::-1], recipe.draw["png_width"], n_points, layers=INK_PICTURE_LAYERS)
 
     def placement(union):
         # The inks' darkness together as separated, before a pen's clip: what the notes on the image speak of.
@@ -135,9 +131,7 @@ def redraw_layers(pixels, names, formats, draw, *, like=None, shape=None, palett
         check_layer_names(inks, separated, palette)
         layers = {layer.name: layer for layer in separated}
         tone = tone_settings([layers[name].density for name in inks], rgb, palette)
-    if ".png" in formats:
-        canvas = shape[::-1]
-        check_png_canvas(canvas, draw["png_width"] or default_png_width(len(pixels), canvas), layers=INK_PICTURE_LAYERS)
+    check_png_outputs(formats, shape[::-1], draw["png_width"], len(pixels), layers=INK_PICTURE_LAYERS)
     rows, columns = shape
     unit = np.mod(np.asarray(pixels) / np.array([columns, rows]), 1.0)
     placed = [(name, ink_colour(name), unit[names == name]) for name in inks]

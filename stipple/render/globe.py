@@ -121,7 +121,7 @@ def _sphere_picture(layers, canvas, projection, width, png_width, background, pe
     return Drawing(
         canvas,
         width,
-        png_width or default_png_width(count),
+        png_width or default_png_width(count, canvas),
         layers,
         background=background,
         pen_width=pen,
