@@ -199,8 +199,9 @@ def sphere_problem(
     accuracy = (epsilon, derivative_epsilon)
     objective, discrepancy = sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy)
     scaled = picture and precondition
-    factor_at = partial(density_at, stiffness_map(density, n_points)) if scaled else None
-    manifold = ScaledSphere(factor_at, threads) if scaled else Sphere(threads)
+    manifold = (
+        ScaledSphere(partial(density_at, stiffness_map(density, n_points)), threads) if scaled else Sphere(threads)
+    )
     # The same map with other counts: the coarse-to-fine start's levels (``stipple.multilevel``).
     same = partial(
         sphere_problem,
