@@ -166,9 +166,9 @@ def test_blocks_on_threads_give_the_one_piece_values(rng, monkeypatch):
 
 def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
     """A map's derivatives in single precision (``DERIVATIVE_EPSILON``, which ``stipple sphere`` asks for), as on
-    the torus: the energy (the
-    residual, at ``epsilon``) is the double-precision one to 1e-12, the gradient and the Hessian form are within
-    1e-4 of it; the levels keep the setting; designs and the Sobolev kernel keep ``epsilon`` throughout."""
+    the torus: the energy (the residual, at ``epsilon``) is the double-precision one to 1e-12, the gradient and the
+    Hessian form are within 1e-4 of it; the levels keep the setting; designs and the Sobolev kernel keep
+    ``epsilon`` throughout."""
     from stipple.torus import DERIVATIVE_EPSILON
 
     values = 0.1 + rng.random((18, 36))
