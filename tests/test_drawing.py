@@ -267,3 +267,33 @@ def test_a_very_tall_image_gets_a_narrower_default_png_not_a_huge_one(tmp_path):
     assert result.exit_code == 0, result.output
     with Image.open(tmp_path / "s.png") as picture:
         assert picture.size == (24, TALLEST * 1024)
+
+
+def _ink_centroid(picture, size):
+    """The ink's centroid of a white-paper PNG picture, in the user units of a canvas of ``size`` stretched onto
+    the picture's whole frame (as ``stipple evaluate`` maps a picture onto its input)."""
+    ink = 1 - np.asarray(picture, dtype=np.float64) / 255
+    rows, columns = ink.shape
+    y, x = np.mgrid[0:rows, 0:columns] + 0.5
+    return np.array([(ink * x).sum() * size[0] / columns, (ink * y).sum() * size[1] / rows]) / ink.sum()
+
+
+@pytest.mark.parametrize("blend", ["over", "multiply"])
+def test_a_png_maps_the_canvas_onto_its_whole_frame(blend):
+    """A 480 x 160 canvas drawn 1024 wide is 341.33 pixels high: the PNG has 341 whole rows and the canvas fills
+    them, so a dot near the bottom is where the frame puts it. With one scale for both axes the canvas filled
+    341.25 of 342 rows (the last one part paper) and the dot sat 0.29 user units too high, the line 0.22 (a page
+    of text measured 0.0033 instead of 0.0019 at sigma 4 px against its input)."""
+    from stipple.io.png import render_line, render_picture
+    from stipple.render.dots import Dots
+
+    size, centre = (480, 160), np.array([400.0, 150.0])
+    dots = Dots("d", (0.0, 0.0, 0.0), centre[None], np.array([3.0]))
+    underlay = None if blend == "over" else (lambda *_: None)
+    picture = render_picture([dots], size, 1024, blend=blend, underlay=underlay)
+    assert picture.size == (1024, 341)
+    assert _ink_centroid(picture, size) == pytest.approx(centre, abs=0.02)
+    line = render_line(np.array([[40.0, 150.0], [440.0, 150.0]]), size, 1024, 2.0, closed=False)
+    assert line.size == (1024, 341)
+    # Pillow strokes whole fine pixels (8.53 a user unit here): within one of them.
+    assert _ink_centroid(line, size)[1] == pytest.approx(150.0, abs=0.1)

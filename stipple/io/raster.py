@@ -7,10 +7,11 @@ import numpy as np
 
 def disc_mask(centres, radii, scale, shape):
     """The boolean image ``(rows, columns) = shape`` of the pixels whose centres lie inside a disc (strictly):
-    ``centres`` and ``radii`` in canvas units, ``scale`` pixels per unit, pixel ``(i, j)`` the canvas's square
-    ``[j, j + 1) / scale x [i, i + 1) / scale``."""
+    ``centres`` and ``radii`` in canvas units, ``scale`` pixels per unit (one number, or ``(sx, sy)``), pixel
+    ``(i, j)`` the canvas's rectangle ``[j, j + 1) / sx x [i, i + 1) / sy``."""
     centres = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
-    return draw_discs(tuple(shape), centres * scale, np.asarray(radii, dtype=np.float64), (scale, scale))
+    sx, sy = np.broadcast_to(np.asarray(scale, dtype=np.float64), (2,))
+    return draw_discs(tuple(shape), centres * [sx, sy], np.asarray(radii, dtype=np.float64), (sx, sy))
 
 
 def draw_discs(shape, centres, radii, scale):

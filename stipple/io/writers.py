@@ -46,6 +46,7 @@ def _outline(box):
     0.08 dark and the blurred tone 0.06 darker than the map's where it was light.)"""
 
     def draw(canvas, scale):
-        canvas.ellipse(tuple(value * scale for value in box), outline=255, width=SUPERSAMPLE)
+        sx, sy = scale
+        canvas.ellipse((box[0] * sx, box[1] * sy, box[2] * sx, box[3] * sy), outline=255, width=SUPERSAMPLE)
 
     return draw
