@@ -12,6 +12,9 @@ dots (``warm``) against a cold run of the frame on its own (``halftone_torus``, 
 * ``E_N`` at N = 128 (the plain bandlimited error, no near field; low frequencies, where a viewer looks);
 * PSNR of the exactly blurred dots against the blurred density at sigma 1, 2 and 4 px (``exact_blurs``);
 * the worst local error at sigma 4 px: ``max |blurred dots - blurred density|`` (darkness units);
+* p01, the 1st percentile of the nearest-neighbour distance over the local hexagonal spacing (``torus_clumps``, as
+  ``stipple evaluate`` reports it): the dots' regularity, which none of the above sees (the warm frames' pinned
+  phase leaves pairs closer than a cold run's: chains ahead of a moving object);
 * the moves of the still dots (in pixels farther than two spacings from every pixel that changes in the clip)
   from the frame before, over the local hexagonal spacing: median and 95th percentile;
 * seconds per frame;
@@ -50,7 +53,7 @@ from clips import (  # noqa: E402
 from video import densities, pair_moves, spacing  # noqa: E402
 
 from stipple.colour import halftone_colour  # noqa: E402
-from stipple.measures.evaluate import discrepancy_energy, exact_blurs, psnr  # noqa: E402
+from stipple.measures.evaluate import discrepancy_energy, exact_blurs, psnr, torus_clumps  # noqa: E402
 from stipple.measures.picture import measure_picture  # noqa: E402
 from stipple.pipelines.outputs import layered_files  # noqa: E402
 from stipple.torus import default_bandwidth, halftone_torus, torus_problem  # noqa: E402
@@ -68,9 +71,10 @@ SIGMAS = (1.0, 2.0, 4.0)
 
 
 def frame_measures(weights, points, count, threads):
-    """E_N at ``LOW_BANDWIDTH``, PSNR per sigma and the worst local error at the largest sigma."""
+    """E_N at ``LOW_BANDWIDTH``, PSNR per sigma, the worst local error at the largest sigma and p01."""
     problem = torus_problem(weights, count, LOW_BANDWIDTH, threads=threads, near_field=False)
-    measures = {"energy": discrepancy_energy(problem, points), "psnr": []}
+    p01 = torus_clumps(points, weights)["neighbour_distance_over_hexagonal"]["p01"]
+    measures = {"energy": discrepancy_energy(problem, points), "psnr": [], "p01": p01}
     for sigma in SIGMAS:
         reference, test = exact_blurs(weights, points, sigma, threads)
         measures["psnr"].append(psnr(reference, test))
@@ -119,10 +123,13 @@ def clip_case(name, clip, count, threads, cold=None, **options):
             "worst": hot["worst"],
             "cold_worst": cool["worst"],
             "worst_over_cold": hot["worst"] / cool["worst"],
+            "p01": hot["p01"],
+            "cold_p01": cool["p01"],
             "seed_1": {
                 "energy_over_cold": second["energy"] / cool["energy"],
                 "psnr4_below_cold": cool["psnr"][2] - second["psnr"][2],
                 "worst_over_cold": second["worst"] / cool["worst"],
+                "p01_below_cold": cool["p01"] - second["p01"],
             },
         }
         if k and mask.any():
@@ -134,6 +141,7 @@ def clip_case(name, clip, count, threads, cold=None, **options):
         "energy_over_cold": max(r["energy_over_cold"] for r in rows_out),
         "psnr4_below_cold": max(r["cold_psnr"][2] - r["psnr"][2] for r in rows_out),
         "worst_over_cold": max(r["worst_over_cold"] for r in rows_out),
+        "p01_below_cold": max(r["cold_p01"] - r["p01"] for r in rows_out),
         "still_move_median": max((m[0] for m in moved), default=None),
         "still_move_p95": max((m[1] for m in moved), default=None),
         "warm_over_cold_seconds": statistics.median(s for _, s in warm[1:]) / statistics.median(s for _, s in cold),
