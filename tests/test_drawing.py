@@ -297,3 +297,19 @@ def test_a_png_maps_the_canvas_onto_its_whole_frame(blend):
     assert line.size == (1024, 341)
     # Pillow strokes whole fine pixels (8.53 a user unit here): within one of them.
     assert _ink_centroid(line, size)[1] == pytest.approx(150.0, abs=0.1)
+
+
+def test_a_png_less_than_a_pixel_high_is_refused_or_drawn_on_one_row():
+    """Fitted to whole pixels, a canvas below half a pixel high would have no row at all: the PNG writers still
+    refuse one below 7/8 of a pixel (``check_png_canvas``), and the measuring picture of a very wide line (the
+    tone stroke of a 9000 x 2 image, 2048 wide) is drawn on one row instead of failing in Pillow's ``reduce``."""
+    from stipple.errors import StippleError
+    from stipple.io.png import check_png_canvas, render_line
+
+    for pixels_wide in (200, 400):  # 0.3 and 0.6 pixels high
+        with pytest.raises(StippleError, match="less than one pixel high"):
+            check_png_canvas((2000, 3), pixels_wide)
+    check_png_canvas((2000, 3), 600)  # 0.9 pixels high: one row
+    line = render_line(np.array([[10.0, 1.0], [8990.0, 1.0]]), (9000, 2), 2048, 1.0, closed=False)
+    assert line.size == (2048, 1)
+    assert np.asarray(line).min() < 255

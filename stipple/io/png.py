@@ -23,14 +23,17 @@ def png_canvas(size, pixels_wide):
     """Per-axis scales ``(sx, sy)`` (fine pixels per user unit) and ``(width, height)`` of the supersampled canvas
     for a PNG ``pixels_wide`` wide of ``size``.
 
-    The PNG has ``pixels_wide × round(pixels_wide · height / width)`` whole pixels and the canvas maps ``size`` onto
-    exactly those, so ``sy`` differs from ``sx`` by at most half a pixel over the height. (Until 2026-11-26 one
+    The PNG has ``pixels_wide × round(pixels_wide · height / width)`` whole pixels (at least one row: a canvas less
+    than half a pixel high is stretched onto it; ``check_png_canvas`` refuses such PNGs, the measuring pictures of
+    ``stipple.render.flat.tone_stroke`` draw them) and the canvas maps ``size`` onto exactly those, so otherwise
+    ``sy`` differs from ``sx`` by at most half a pixel over the height. (Until 2026-11-26 one
     scale served both axes and the last row was part paper: a 480×160 image drawn 1024 wide filled 341.25 of its
     342 rows, and against its input, stretched onto the same frame, a dot 150 rows down sat 0.29 input pixels
     high: luminance RMSE at σ = 4 px 0.0033 instead of 0.0019 on a page of text.)
     """
     width, height = size
-    columns, rows = int(round(pixels_wide)) * SUPERSAMPLE, int(round(pixels_wide * height / width)) * SUPERSAMPLE
+    pixels_high = max(int(round(pixels_wide * height / width)), 1)
+    columns, rows = int(round(pixels_wide)) * SUPERSAMPLE, pixels_high * SUPERSAMPLE
     return (columns / width, rows / height), (columns, rows)
 
 
@@ -46,7 +49,8 @@ def check_png_canvas(size, pixels_wide, layers=2):
             f"{picture} would be {columns // SUPERSAMPLE}×{rows // SUPERSAMPLE} pixels, more than "
             f"{MAX_CANVAS_SIDE // SUPERSAMPLE} per side: use a smaller --png-width, or SVG"
         )
-    if min(columns, rows) < SUPERSAMPLE:
+    # As before the canvas was fitted to whole pixels: refused below 7/8 of a pixel high or wide.
+    if min(columns, round(SUPERSAMPLE * pixels_wide * size[1] / size[0])) < SUPERSAMPLE:
         raise StippleError(f"{picture} would be less than one pixel high or wide: use a larger --png-width, or SVG")
     needed, available = columns * rows * layers * 1.1, allocator.available_memory()
     if needed > available:
@@ -211,7 +215,7 @@ def _draw_layer(canvas, dots, scale, pen_width, fill):
         canvas.paste(fill, mask=_disc_mask(centres, radii, scale, canvas.size))
     else:
         draw = ImageDraw.Draw(canvas)
-        # Foreshortened dots are sphere pictures', whose canvases (2:1 or square) have sx = sy but for rounding.
+        # Foreshortened dots are the globe's, whose canvas is square: sx = sy.
         for centre, radius, squash, angle in zip(
             dots.centres * scale, dots.radii * scale[0], dots.squash, dots.angle, strict=True
         ):
