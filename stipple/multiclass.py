@@ -145,8 +145,9 @@ def class_bandwidth(bandwidth, class_points, n_points):
 
 # The terms' problems keep the flat metric and the full default bandwidth: the classes' run stops by ``tol``, whose
 # meaning the density-scaled metric would change. At 0.7 of the bandwidth colour's iterations cost a tenth less but
-# ``tol`` stopped later, and the held-out pictures did not gain (docs/performance.md, thirteenth round); the
-# metric was not measured on colour, and neither on the progressive order's levels (docs/plotters.md).
+# ``tol`` stopped later, and the held-out pictures did not gain (docs/performance.md, thirteenth round); a
+# density-scaled metric per ink changed nothing on colour (same file). Neither was measured on the progressive
+# order's levels (docs/plotters.md).
 TERM_SETTINGS = {"precondition": False, "bandwidth_factor": 1.0}
 
 
