@@ -114,6 +114,19 @@ def test_line_bad_input(ramp_path, tmp_path, args, message, monkeypatch):
     assert result.exit_code == 1 and message in result.output, result.output
 
 
+def test_a_line_png_too_large_to_draw_is_refused_before_the_run(tmp_path):
+    """``stipple line`` checked no PNG size: a 3 x 2000 image drawn 32768 pixels wide (a 32768 x 21845333 PNG)
+    ran the whole optimisation and was then killed for memory while drawing. Now it is refused at once, in one
+    line, and writes nothing."""
+    path = tmp_path / "tall.png"
+    Image.fromarray(np.full((2000, 3), 100, dtype=np.uint8)).save(path)
+    out = tmp_path / "x.png"
+    result = run(["line", path, "-M", 200, "--png-width", 32768, "-q", "-o", out, "-o", tmp_path / "x.csv"])
+    assert result.exit_code == 1 and "more than 262144 per side" in result.output, result.output
+    assert len(result.output.strip().splitlines()) == 1
+    assert not out.exists() and not (tmp_path / "x.csv").exists()
+
+
 def test_vpype_reads_the_line_svg_as_one_closed_pen_path(ramp_path, tmp_path):
     """The SVG a plotter gets: one layer, one closed path through the CSV's vertices in physical units, one pen."""
     vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")

@@ -38,10 +38,12 @@ def line(ctx, image, **options):
     from ..halftone import check_count
     from ..io.commit import FLAT_FORMATS, output_format
     from ..io.images import load_input
+    from ..io.png import check_png_outputs
     from ..io.units import BLACK, WHITE, parse_length
     from ..line import line_points
     from ..line.problem import line_settings
     from ..pipelines.outputs import line_files
+    from ..render.flat import line_png_width
 
     started = time.perf_counter()
     image = resolve_input(ctx, image)
@@ -57,10 +59,12 @@ def line(ctx, image, **options):
             )
             check_count(options["n_points"])
             line_settings(weights, options["n_points"], options["length"], options["bandwidth"], OPTION_NAMES)
+            formats = [output_format(path) for path in options["outputs"]]
+            png_width = line_png_width(options["png_width"], weights.shape)
+            check_png_outputs(formats, weights.shape[::-1], png_width, options["n_points"])
             init = None if options["init"] is None else read_line_init(options["init"], weights.shape, options)
             result, stopped_by = solve_line(weights, options, init)
             points = line_points(result.points)
-            formats = [output_format(path) for path in options["outputs"]]
             colours = {"color": WHITE, "background": BLACK} if options["invert"] else {}
             files = line_files(
                 points,
@@ -68,7 +72,7 @@ def line(ctx, image, **options):
                 formats,
                 width=width,
                 pen_width=pen_width,
-                png_width=options["png_width"],
+                png_width=png_width,
                 ink=float(weights.mean()),
                 **colours,
             )

@@ -94,6 +94,14 @@ def layered_drawing(
 # twice the image's width, at most STROKE_PICTURE_WIDTH pixels (drawn at 4 x that: the memory stays bounded).
 STROKE_PASSES = 3
 STROKE_PICTURE_WIDTH = 2048
+# A line's PNG is this many pixels wide per input pixel unless --png-width says otherwise.
+LINE_PNG_SCALE = 4
+
+
+def line_png_width(png_width, shape):
+    """A line drawing's PNG width: ``png_width``, or ``LINE_PNG_SCALE`` times the input's ``(rows, columns)``
+    width."""
+    return png_width or LINE_PNG_SCALE * shape[1]
 
 
 def line_drawing(
@@ -101,9 +109,9 @@ def line_drawing(
 ):
     """The ``Drawing`` of a closed curve (vertices in unit coordinates, path order) for an image of ``shape``: one
     closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``) in ``color`` on
-    ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default: the input's width
-    × 4). Without ``pen_width`` the stroke is ``tone_stroke`` for ``ink``, the density's mean (one input pixel
-    without it)."""
+    ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default:
+    ``line_png_width``). Without ``pen_width`` the stroke is ``tone_stroke`` for ``ink``, the density's mean (one
+    input pixel without it)."""
     rows, columns = shape
     pixels = np.asarray(points) * np.array([columns, rows])
     if pen_width is not None:
@@ -113,7 +121,7 @@ def line_drawing(
     return Drawing(
         (columns, rows),
         width,
-        png_width or 4 * columns,
+        line_png_width(png_width, shape),
         notes=(f"one closed line, {len(pixels)} vertices, stroke {stroke:.3g} px",),
         background=tuple(background),
         line=pixels,
