@@ -7,11 +7,10 @@ import numpy as np
 
 def disc_mask(centres, radii, scale, shape):
     """The boolean image ``(rows, columns) = shape`` of the pixels whose centres lie inside a disc (strictly):
-    ``centres`` and ``radii`` in canvas units, ``scale`` pixels per unit (one number, or ``(sx, sy)``), pixel
-    ``(i, j)`` the canvas's rectangle ``[j, j + 1) / sx x [i, i + 1) / sy``."""
+    ``centres`` and ``radii`` in canvas units, ``scale = (sx, sy)`` pixels per unit, pixel ``(i, j)`` the
+    canvas's rectangle ``[j, j + 1) / sx x [i, i + 1) / sy``."""
     centres = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
-    sx, sy = np.broadcast_to(np.asarray(scale, dtype=np.float64), (2,))
-    return draw_discs(tuple(shape), centres * [sx, sy], np.asarray(radii, dtype=np.float64), (sx, sy))
+    return draw_discs(tuple(shape), centres * scale, np.asarray(radii, dtype=np.float64), tuple(scale))
 
 
 def draw_discs(shape, centres, radii, scale):
