@@ -8,6 +8,8 @@ import pytest
 from safety_helpers import FAST, invoke, leftovers, make_image, refused, snapshot
 
 import stipple.io.commit
+from stipple.errors import StippleError
+from stipple.io.commit import StagedOutputs
 
 OUTPUTS = ["-o", "a.csv", "-o", "b.svg", "-o", "c.png"]
 
@@ -42,6 +44,24 @@ def test_a_failed_write_leaves_every_output_untouched(folder, monkeypatch, faili
 def test_a_failed_rename_removes_the_remaining_temporaries(folder, monkeypatch):
     monkeypatch.setattr(os, "replace", failing_on_call(1, os.replace))
     refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "cannot write")
+
+
+@pytest.mark.parametrize("failing_call", [2, 4, 6])
+def test_a_rename_failing_after_others_puts_every_output_back(folder, monkeypatch, failing_call):
+    # Each existing target is set aside (one os.replace), then replaced (another): calls 2, 4 and 6 are the
+    # renames of a.csv, b.svg and c.png, so 4 and 6 fail after one or two outputs were already in place.
+    monkeypatch.setattr(os, "replace", failing_on_call(failing_call, os.replace))
+    refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "cannot write")
+
+
+def test_a_folder_made_where_a_staged_output_goes_is_refused_with_nothing_renamed(tmp_path):
+    (tmp_path / "a.csv").write_text("old\n")
+    with pytest.raises(StippleError, match="b.png: cannot write .it is a folder"), StagedOutputs() as staged:
+        staged.add(tmp_path / "a.csv", b"new\n")
+        staged.add(tmp_path / "b.png", b"new\n")
+        (tmp_path / "b.png").mkdir()
+        staged.commit()
+    assert (tmp_path / "a.csv").read_text() == "old\n" and not leftovers(tmp_path)
 
 
 def test_render_and_evaluate_commit_together(folder, monkeypatch):

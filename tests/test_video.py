@@ -1,11 +1,13 @@
 """Stippled video (``stipple.video``, ``stipple video``): coherent dots, checkpoints, outputs and bad inputs."""
 
 import io
+import resource
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 from PIL import Image
+from safety_helpers import leftovers, stipple_process
 from scipy.ndimage import gaussian_filter
 
 from stipple import StippleError
@@ -240,6 +242,27 @@ def test_a_frame_failing_mid_way_leaves_no_output(tmp_path):
     result = video(source, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv", "-o", tmp_path / "f/%d.png")
     assert result.exit_code == 1 and "frame 3 is 30×30 pixels" in result.output
     assert not (tmp_path / "d.csv").exists() and not list((tmp_path / "f").iterdir())
+
+
+def test_a_folder_where_a_later_frame_goes_leaves_every_output_as_it_was(tmp_path):
+    source = frames_folder(tmp_path / "in", moving_disc(4))
+    (tmp_path / "f/2.png").mkdir(parents=True)  # only frame 2's file cannot be written
+    (tmp_path / "d.csv").write_text("old\n")
+    result = video(source, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv", "-o", tmp_path / "f/%d.png")
+    assert result.exit_code == 1 and "f/2.png: cannot write (it is a folder)" in result.output
+    assert (tmp_path / "d.csv").read_text() == "old\n"
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == ["2.png"]
+    assert not leftovers(tmp_path)
+
+
+def test_a_full_disk_during_the_run_names_the_output_and_leaves_no_temporary(tmp_path):
+    pytest.importorskip("av")
+    source = frames_folder(tmp_path / "in", moving_disc(4))
+    limit = lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))  # noqa: E731  (bytes per file)
+    args = ["video", source, "-M", COUNT, "-N", BANDWIDTH, "-q", "-o", "d.csv", "-o", "v.mp4"]  # the CSV: 40 kB
+    result = stipple_process(args, tmp_path, preexec_fn=limit)
+    assert result.returncode == 1 and result.stderr.strip() == "Error: d.csv: cannot write (File too large)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in"] and not leftovers(tmp_path)
 
 
 def test_only_dots_near_a_change_are_free_and_the_margin_wraps_around():

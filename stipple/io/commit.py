@@ -118,21 +118,19 @@ class StagedOutputs:
         return temporary
 
     def commit(self):
-        """Write stdout's share, then rename every staged file over its target."""
+        """Write stdout's share, then rename every staged file over its target: all of them, or (a rename refused)
+        none, every target replaced so far put back as it was."""
         for temporary, path in self._temporaries:
             if temporary in self._reserved:
                 _fsync(temporary, path)
+        for _, path in self._temporaries:
+            _check_not_folder(path)
         for data in self._stdout:
             write_stdout(data)
         self._stdout = []
         with _signals_held():
-            while self._temporaries:
-                temporary, path = self._temporaries[0]
-                try:
-                    os.replace(temporary, path)
-                except OSError as error:
-                    raise StippleError(f"{path}: cannot write ({error.strerror})") from None
-                self._temporaries.pop(0)
+            _replace_all(self._temporaries)
+        self._temporaries = []
 
     def discard(self):
         """Remove every temporary file not yet renamed."""
@@ -141,8 +139,54 @@ class StagedOutputs:
         self._temporaries = []
 
 
+def _replace_all(pairs):
+    """``os.replace`` every ``(temporary, path)`` of ``pairs``. Each existing target is first set aside beside
+    itself; if a rename fails, every target replaced so far gets its old file back (or is removed where there was
+    none) before the error is raised, and the set-aside copies are removed once all renames are done."""
+    replaced = []
+    try:
+        for temporary, path in pairs:
+            replaced.append((path, _set_aside(path)))
+            os.replace(temporary, path)
+    except OSError as error:
+        for done, previous in reversed(replaced):
+            _put_back(done, previous)
+        raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+    for _, previous in replaced:
+        if previous is not None:
+            _remove(previous)
+
+
+def _set_aside(path):
+    """Move the existing file ``path`` to a new hidden name beside it and return that name (None: no file)."""
+    if not os.path.lexists(path):
+        return None
+    handle, previous = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".stipple-", suffix=".old")
+    os.close(handle)
+    try:
+        os.replace(path, previous)
+    except OSError:
+        _remove(previous)
+        raise
+    return previous
+
+
+def _put_back(path, previous):
+    """Undo one rename of ``_replace_all``: the set-aside file back at ``path``, or no file where none was."""
+    if previous is None:
+        _remove(path)
+    else:
+        os.replace(previous, path)
+
+
+def _check_not_folder(path):
+    if os.path.isdir(path):
+        raise StippleError(f"{path}: cannot write (it is a folder)")
+
+
 def _write_temporary(path, data):
     """A fsynced temporary file in the directory of ``path`` holding ``data``, with the mode ``path`` will get."""
+    _check_not_folder(path)
     directory = os.path.dirname(os.path.abspath(path))
     try:
         handle, temporary = tempfile.mkstemp(dir=directory, prefix=".stipple-", suffix=".tmp")

@@ -284,8 +284,15 @@ class VideoOutputs:
         return self
 
     def __exit__(self, *exc):
-        self._close()
-        self.staged.__exit__(*exc)
+        """Close the streams and remove every file not committed, whatever fails; a stream that cannot be closed
+        while the block is already failing (a full disk) does not hide that first error."""
+        try:
+            self._close()
+        except StippleError:
+            if exc[0] is None:
+                raise
+        finally:
+            self.staged.__exit__(*exc)
 
     def add(self, index, points, density, labels=None):
         """Stage frame ``index`` (its number in the source): CSV rows (with the dots' ``labels``), frames, MP4."""
@@ -317,14 +324,24 @@ class VideoOutputs:
         self.staged.commit()
 
     def _close(self):
-        for path, stream in self.tables:
-            if not stream.closed:
-                try:
-                    stream.close()
-                except OSError as error:
-                    raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
-        for movie in self.movies:
-            movie.close()
+        """Close every CSV and MP4 stream, then raise the first failure, if any."""
+        closers = [partial(_close_table, path, stream) for path, stream in self.tables]
+        failures = []
+        for close in closers + [movie.close for movie in self.movies]:
+            try:
+                close()
+            except StippleError as error:
+                failures.append(error)
+        if failures:
+            raise failures[0]
+
+
+def _close_table(path, stream):
+    if not stream.closed:
+        try:
+            stream.close()
+        except OSError as error:
+            raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
 
 
 def _write(stream, path, data):
@@ -370,11 +387,12 @@ class Mp4Stream:
             return
         container, self.container = self.container, None
         try:
-            container.mux(self.stream.encode(None))
+            try:
+                container.mux(self.stream.encode(None))
+            finally:
+                container.close()
         except (self.av.FFmpegError, OSError) as error:
             raise StippleError(f"{self.path}: cannot write the MP4 ({_reason(error)})") from None
-        finally:
-            container.close()
 
 
 CHECKPOINT_FORMAT = "stipple-video-checkpoint"
