@@ -430,7 +430,7 @@ def _result(status, frames, timings, seconds, cold_first=True):
     cold = timings[0] if cold_first and timings and len(timings) == frames else None
     warm = timings[1:] if cold is not None else timings
     average = sum(warm) / len(warm) if warm else None
-    message = f"{frames} frames"
+    message = f"{frames} frame" + ("" if frames == 1 else "s")
     if cold is not None:
         message += f"; frame 0 (cold) {cold:.2f} s"
     if average is not None:

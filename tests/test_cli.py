@@ -167,6 +167,24 @@ def test_the_progress_bar_counts_each_phase_without_the_cap_as_its_total(monkeyp
     assert "2000" not in stream.getvalue() and shown[-1].lstrip().startswith("4it"), shown[-3:]
 
 
+def test_the_video_bar_shows_from_the_start_and_names_the_frame_just_finished(monkeypatch):
+    """The bar appeared only when the cold first frame (the longest) was done, then named the frame before."""
+    import io
+    from types import SimpleNamespace
+
+    from stipple.cli.video import FrameProgress
+
+    stream = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", stream)
+    progress = FrameProgress(3, enabled=True)
+    progress.start()
+    assert "0/3" in stream.getvalue() and "the first frame: a cold run" in stream.getvalue()
+    progress.bar.mininterval = 0  # as if the frame took a while: the update redraws the bar
+    progress(SimpleNamespace(index=7, iterations=12, replayed=False))
+    assert stream.getvalue().replace("\r", "\n").splitlines()[-1].endswith("frame 7: 12 iterations]")
+    progress.close()
+
+
 @pytest.mark.parametrize("command", ["torus", "colour", "line"])
 def test_flat_commands_refuse_geojson_before_any_work(image_path, command):
     """The formats are checked with the other outputs, before the run (a held-out sweep waited 10 s for

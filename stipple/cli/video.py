@@ -174,23 +174,39 @@ def video_settings(options, shape, draw):
 
 
 class FrameProgress(Progress):
-    """The progress bar over the ``total`` frames (off when quiet or stderr is not a TTY)."""
+    """The progress bar over the ``total`` frames (off when quiet or stderr is not a TTY): shown from the start,
+    since the first frame is a cold run, the longest of all, and its clock kept going within a frame."""
 
     def __init__(self, total, enabled):
         super().__init__(enabled)
         self.total = total
+        self._refreshed = 0.0
+
+    def start(self):
+        if self.enabled:
+            self._open().set_postfix_str("the first frame: a cold run")
+
+    def watch(self, state):
+        """Every CG state of the frame under way: the bar redrawn (its clock) at most twice a second."""
+        if self.enabled and time.monotonic() - self._refreshed > 0.5:
+            self._refreshed = time.monotonic()
+            self._open().refresh()
+        return False
 
     def __call__(self, frame):
         if not self.enabled:
             return False
+        done = "from the checkpoint" if frame.replayed else f"{frame.iterations} iterations"
+        self._open().set_postfix_str(f"frame {frame.index}: {done}", refresh=False)
+        self.bar.update(1)
+        return False
+
+    def _open(self):
         if self.bar is None:
             from tqdm import tqdm
 
             self.bar = tqdm(total=self.total, unit="frame", file=sys.stderr, dynamic_ncols=True)
-        self.bar.update(1)
-        done = "from the checkpoint" if frame.replayed else f"{frame.iterations} iterations"
-        self.bar.set_postfix_str(f"frame {frame.index}: {done}", refresh=False)
-        return False
+        return self.bar
 
 
 def run_frames(frames, settings, outputs, options):
@@ -225,13 +241,14 @@ def run_frames(frames, settings, outputs, options):
         if colour
         else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
     )
+    progress.start()
     with SIGNALS.deferred() as interruption:
         try:
             result = stipple_video(
                 pictures,
                 settings,
                 on_frame=on_frame,
-                stop=interruption.stop_requested,
+                stop=lambda state: progress.watch(state) or interruption.stop_requested(state),
                 checkpoint=options["checkpoint"],
                 resume=options["resume"],
                 checkpoint_seconds=seconds,
@@ -246,4 +263,5 @@ def run_frames(frames, settings, outputs, options):
 def finish(result, stopped_by, options, started):
     """The summary on stderr, and after a signal the exit status (130 / 143) and how to resume."""
     written = "outputs written" if result.frames else "no frame was finished, no output written"
-    supervise.finish(result, stopped_by, options, started, f"after {result.frames} frames; {written}", energy=False)
+    frames = f"{result.frames} frame" + ("" if result.frames == 1 else "s")
+    supervise.finish(result, stopped_by, options, started, f"after {frames}; {written}", energy=False)
