@@ -190,6 +190,20 @@ def test_evaluate_measures_colour_when_the_input_has_colour(tmp_path):
     assert json.loads(evaluate(source, source, "--json", "-", "--gray").output)["measures"] == "gray"
 
 
+@pytest.mark.parametrize("shape", [(20, 1000), (2, 500)])
+def test_evaluate_measures_the_default_png_of_a_long_strip(tmp_path, shape):
+    """Its height rounded to whole pixels puts its width : height 2.4 % off the input's: it was refused."""
+    rows, columns = shape
+    source = save(tmp_path / "in.png", ramp(rows, columns))
+    result = CliRunner().invoke(main, ["torus", str(source), "-M", 300, "-q", "-o", str(tmp_path / "a.png")])
+    assert result.exit_code == 0, result.output
+    drawn = Image.open(tmp_path / "a.png")
+    assert drawn.width == 1024 and abs(np.log((drawn.width / drawn.height) / (columns / rows))) > 0.02
+    report = evaluate(tmp_path / "a.png", source, "--json", "-")
+    assert report.exit_code == 0, report.output
+    assert json.loads(report.output)["drawn_shape"] == [drawn.height, 1024]
+
+
 @pytest.mark.parametrize(
     "make, message",
     [
