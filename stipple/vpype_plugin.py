@@ -22,7 +22,7 @@ from .multiclass import class_slices
 from .pipelines.colour import ink_layers
 from .pipelines.pen import placement_density
 from .progressive import order_dots, progressive_colour
-from .render.dots import flat_dots, least_pen_reach, left_out_note
+from .render.dots import flat_dots, left_out_note
 from .render.pen import dot_paths
 from .render.styles import DOT_STYLES, check_dot_radius_style
 
@@ -56,8 +56,8 @@ def pen_layers(
     scale = width / columns
     tone = scale * np.sqrt(ink * rows * columns / (np.pi * n_points))
     placed = [(name, colour, points * np.array([columns, rows]) * scale) for name, colour, points in inks]
-    reach = None if dot_radius is not None else least_pen_reach(dot_style, pen_width)
-    dots = flat_dots(placed, (width, rows * scale), tone_radius=tone, radius=dot_radius, pen=pen_width, pen_reach=reach)
+    size = (width, rows * scale)
+    dots = flat_dots(placed, size, tone_radius=tone, radius=dot_radius, pen=pen_width, dot_style=dot_style)
     dots = [order_dots(d, order, kept_passes(passes, d.kept)) for d, passes in zip(dots, counts, strict=True)]
     drawn = [(d.name, d.colour, dot_paths(d.centres, d.radii, dot_style, pen_width)) for d in dots]
     return drawn, rows * scale, sum(len(points) for _, _, points in placed) - sum(len(d.centres) for d in dots)

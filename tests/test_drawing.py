@@ -10,7 +10,8 @@ from PIL import Image
 from scipy.spatial import cKDTree
 
 from stipple.cli import main
-from stipple.render.dots import capped_radii, inset
+from stipple.render.dots import capped_radii, flat_dots, inset
+from stipple.render.pen import dot_paths
 
 PORTRAIT = Path(__file__).resolve().parent.parent / "samples" / "astronaut256.png"
 
@@ -129,6 +130,20 @@ def test_no_dot_crosses_the_edge_with_a_large_radius_or_a_pen(ramp, tmp_path):
     )
     vertices = np.array(coordinates, dtype=float)
     assert len(vertices) > 300 and np.all(vertices - 0.2 >= -1e-3) and np.all(vertices + 0.2 <= [48.001, 32.001])
+
+
+@pytest.mark.parametrize("style", ["point", "circle", "filled"])
+def test_no_pen_dot_inks_past_the_page_edge_whatever_its_style(style):
+    """A "point" is a stroke a tenth of the pen long, so the smallest pen dots ink 0.55-0.6 of the pen from their
+    centres: with a margin of half the pen they crossed the edge (0.05 mm over with a 0.5 mm pen)."""
+    size, pen = np.array([40.0, 30.0]), 1.0
+    corners = np.array([[0.0, 0.0], [40.0, 0.0], [0.0, 30.0], [40.0, 30.0], [20.0, 15.0]])
+    (dots,) = flat_dots([("dots", "black", corners)], tuple(size), tone_radius=0.2, pen=pen, dot_style=style)
+    vertices = np.concatenate(
+        [np.column_stack([z.real, z.imag]) for z in dot_paths(dots.centres, dots.radii, style, pen)]
+    )
+    assert len(dots.centres) == 5
+    assert np.all(vertices - pen / 2 >= -1e-9) and np.all(vertices + pen / 2 <= size + 1e-9)
 
 
 def test_capped_radii_and_inset_rules():

@@ -72,16 +72,17 @@ def inset(centres, size, margin):
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
 
 
-def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, pen_reach=None):
+def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, dot_style=None):
     """``Dots`` of layers ``(name, colour, centres)`` on a flat canvas, inset so that none crosses its edge.
 
     With ``radius`` every dot has it; otherwise radii are capped from the spacing of all layers' dots together
-    (``capped_radii`` of ``tone_radius``). ``pen`` (a stroke width) widens the margin for pen-drawn dots.
-    ``pen_reach`` (``least_pen_reach``): a pen dot is never smaller than that, so dots closer together than
-    ``pen_reach / TOUCH_FRACTION`` would touch however small their radii; the dots are first thinned to that
-    distance (``thin_apart``, all layers together), and the layers hold only the dots kept.
+    (``capped_radii`` of ``tone_radius``). ``pen`` (a stroke width) and ``dot_style``, for pen-drawn dots: the
+    margin is at least the smallest dot's ink (``pen_extent``), and without ``radius`` the dots are first thinned
+    (``thin_apart``, all layers together) to ``least_pen_reach / TOUCH_FRACTION``, closer than which they would
+    touch however small their radii; the layers hold only the dots kept.
     """
-    margin = max(radius if radius is not None else tone_radius, (pen or 0.0) / 2)
+    least = 0.0 if pen is None else pen_extent(dot_style, pen)
+    margin = max(radius if radius is not None else tone_radius, least)
     placed = []
     for name, colour, centres in layers:
         moved, margin_used = inset(centres, size, margin)
@@ -90,8 +91,8 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, pen_reach=N
         return [Dots(name, colour, c, np.full(len(c), float(radius))) for name, colour, c in placed]
     everything = np.concatenate([c for _, _, c in placed]) if placed else np.zeros((0, 2))
     kept = np.ones(len(everything), dtype=bool)
-    if pen_reach is not None:
-        kept = thin_apart(everything, pen_reach / TOUCH_FRACTION)
+    if pen is not None:
+        kept = thin_apart(everything, least_pen_reach(dot_style, pen) / TOUCH_FRACTION)
     radii = np.zeros(len(everything))
     radii[kept] = np.minimum(capped_radii(nearest_distances(everything[kept]), tone_radius), margin_used)
     ends = np.cumsum([len(c) for _, _, c in placed])
@@ -115,6 +116,14 @@ def least_pen_reach(dot_style, pen):
     apart still leave a hundredth of the pen between them however their strokes turn); the smallest "circle" is
     a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot is the point's stroke (0.6)."""
     return {"point": 0.5, "circle": 0.55, "filled": 0.6}[dot_style] * pen
+
+
+def pen_extent(dot_style, pen):
+    """How far the smallest pen dot of ``dot_style`` inks from its centre, on its widest side (the margin it needs
+    at the page's edge): a "point" is a stroke a tenth of the pen long from its centre, half the pen around it
+    (0.6 of the pen); the smallest "circle" a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot the
+    point's stroke (0.6). Until 2026-11-27 the margin was half the pen, and such dots crossed the page's edge."""
+    return {"point": 0.6, "circle": 0.55, "filled": 0.6}[dot_style] * pen
 
 
 def thin_dots(dots, distance):

@@ -5,7 +5,7 @@ import numpy as np
 
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
-from .dots import flat_dots, home_positions, ink_radius, least_pen_reach, left_out_note, squash_paths, tone_dots
+from .dots import flat_dots, home_positions, ink_radius, left_out_note, pen_extent, squash_paths, tone_dots
 from .drawing import Drawing
 from .pen import closed_length, dot_paths
 
@@ -69,10 +69,9 @@ def layered_drawing(
                 (name, colour, home_positions(centres, coverage, (columns, rows), reach))
                 for (name, colour, centres), coverage in zip(placed, coverages, strict=True)
             ]
-        reach = None if stroke is None or radius is not None else least_pen_reach(dot_style, stroke)
-        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke, pen_reach=reach)
+        drawn = flat_dots(placed, (columns, rows), tone_radius=tone, radius=radius, pen=stroke, dot_style=dot_style)
         drawn = with_pen_paths(drawn, dot_style, pen)
-        margin = _margin(drawn, stroke)
+        margin = _margin(drawn, None if stroke is None else pen_extent(dot_style, stroke))
         notes = [f"{count} dots in {len(drawn)} layer(s), inset {margin:.4g} user units from the edges"]
         left_out = count - sum(len(dots.centres) for dots in drawn)
         if left_out:
@@ -169,7 +168,7 @@ def drawn_sizes(width, columns, dot_radius, dot_style, pen_width):
     return radius, (pen if dot_style != "disc" else None), pen
 
 
-def _margin(layers, pen):
-    """The largest radius drawn (or half the pen), for the SVG's note."""
+def _margin(layers, least):
+    """The largest radius drawn (or the smallest pen dot's ink, ``least``), for the SVG's note."""
     radii = [dots.radii.max() for dots in layers if len(dots.radii)]
-    return max(radii + [(pen or 0.0) / 2])
+    return max(radii + [least or 0.0])
