@@ -246,6 +246,25 @@ def test_pen_dots_never_touch_on_the_globe(style, projection):
     assert len(dots.centres) > (1200 if projection == "ortho" else 2400)
 
 
+@pytest.mark.parametrize("projection", ["ortho", "equirect"])
+@pytest.mark.parametrize("style", ["point", "circle", "filled"])
+def test_pen_dots_on_the_globe_and_the_map_stay_on_the_page(style, projection):
+    """The map inset its dots by their radius only and the globe not at all: a 5 mm pen on a 100 mm globe of 500
+    dots inked 1.4 mm past its edge, the map 0.8 mm past its with a 1.5 mm pen."""
+    from stipple.design import fibonacci_lattice
+    from stipple.render.globe import sphere_drawing
+
+    points = fibonacci_lattice(500, np.random.default_rng(1), jitter=0.2)
+    lon_lat = (np.degrees(np.arctan2(points[:, 1], points[:, 0])), np.degrees(np.arcsin(points[:, 2])))
+    options = dict(width=(100.0, "mm"), dot_style=style, pen_width=(5.0, "mm"), style="plotter")
+    drawing = sphere_drawing(points, lon_lat, projection=projection, **options)
+    (dots,) = drawing.layers
+    vertices = np.concatenate([np.column_stack([path.real, path.imag]) for path in dots.paths])
+    half_pen = drawing.pen_width / 2
+    assert len(dots.paths) > 50
+    assert np.all(vertices - half_pen >= -1e-9) and np.all(vertices + half_pen <= np.array(drawing.size) + 1e-9)
+
+
 def test_the_tone_stroke_inks_the_mean_darkness_where_the_line_crosses_itself():
     """``ink W H / length`` alone ignores the ink that crossings and touching strokes share: a wandering closed
     line of 4000 vertices drawn for 0.4 of a 120 x 80 image laid down 0.31; the stroke corrected by the drawn

@@ -18,6 +18,7 @@ from .dots import (
     left_out_note,
     nearest_distances,
     orthographic,
+    pen_extent,
     projected_darkness,
     sphere_canvas,
     sphere_per_radian,
@@ -69,10 +70,10 @@ def sphere_drawing(
     angles = (
         capped_radii(angular_distances(points), tone) if fixed is None else np.full(len(points), fixed / per_radian)
     )
+    least = 0.0 if stroke is None else pen_extent(dot_style, stroke)
     if projection == "equirect":
-        centres, margin = inset(
-            equirectangular(longitude, latitude, canvas[0], view[0]), canvas, per_radian * angles.max(initial=0)
-        )
+        largest = max(per_radian * angles.max(initial=0), least)
+        centres, margin = inset(equirectangular(longitude, latitude, canvas[0], view[0]), canvas, largest)
         drawn = Dots("dots", color, centres, np.minimum(angles * per_radian, margin))
         notes = [f"{len(points)} dots, equirectangular (all of them)"]
     else:
@@ -93,8 +94,28 @@ def sphere_drawing(
         drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
         if left_out:
             warnings = [left_out_note(left_out, f"the {shown} dots shown")]
+    globe = GLOBE
+    if projection == "ortho" and stroke is not None:
+        drawn, shrink = fit_globe(drawn, least)
+        globe *= shrink
     layers = with_pen_paths([drawn], dot_style, pen)
-    return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings)
+    return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings, globe)
+
+
+def fit_globe(dots, least):
+    """Pen dots of the orthographic globe, and the factor by which they were brought towards its centre (their
+    radii with them) so that every dot's ink (its radius, at least ``least``: ``pen_extent``) stays on the canvas;
+    1 where it already does. Near the limb the dots are foreshortened but the pen is not: a 5 mm pen on a 100 mm
+    globe inked 1.4 mm past the edge."""
+    half = ORTHO_SIZE / 2
+    distance = np.hypot(*(dots.centres - half).T)
+    outward = dots.radii * dots.squash  # a dot's radius towards the limb, foreshortened
+    if not len(distance) or np.all(distance + np.maximum(outward, least) <= half):
+        return dots, 1.0
+    shrink = (half - least) / np.max(distance + outward)
+    dots.centres = half + (dots.centres - half) * shrink
+    dots.radii = dots.radii * shrink
+    return dots, shrink
 
 
 def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
@@ -114,10 +135,11 @@ def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
     return tone_dots([("dots", color, centres)], canvas, [coverage])[0], [note]
 
 
-def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings=()):
-    """The ``Drawing`` of a sphere picture's layers (the globe's outline under an orthographic PNG)."""
+def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings=(), globe=GLOBE):
+    """The ``Drawing`` of a sphere picture's layers (the globe's outline, ``globe`` of the canvas, under an
+    orthographic PNG)."""
     count = sum(len(dots.centres) for dots in layers)
-    low, high = (1 - GLOBE) / 2 * ORTHO_SIZE, (1 + GLOBE) / 2 * ORTHO_SIZE
+    low, high = (1 - globe) / 2 * ORTHO_SIZE, (1 + globe) / 2 * ORTHO_SIZE
     return Drawing(
         canvas,
         width,
