@@ -195,6 +195,16 @@ def test_the_mp4_plays_with_every_frame(tmp_path):
     assert len(decoded) == 4 and decoded[0].shape[1] == 250 and decoded[0].shape[0] % 2 == 0
 
 
+def test_every_second_frame_plays_at_half_the_rate_so_the_clip_keeps_its_duration(tmp_path):
+    """With --step 2 the MP4 kept the source's rate and played twice as fast (a held-out review: --step 3, 3 times)."""
+    av = pytest.importorskip("av")
+    path = write_mp4(tmp_path / "clip.mp4", moving_disc(4, 64, 48))  # 12 frames a second
+    result = video(path, "-M", COUNT, "-N", BANDWIDTH, "--step", 2, "-o", tmp_path / "out.mp4")
+    assert result.exit_code == 0, result.output
+    with av.open(str(tmp_path / "out.mp4")) as container:
+        assert container.streams.video[0].average_rate == 6 and container.streams.video[0].frames in (0, 2)
+
+
 def write_mp4(path, clip):
     av = pytest.importorskip("av")
     with av.open(str(path), "w") as container:

@@ -56,7 +56,7 @@ DEFAULT_FPS = 24.0
     "--fps",
     type=click.FloatRange(min=0.01, max=1000),
     default=None,
-    help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images).",
+    help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images, over --step: the same duration).",
 )
 @click.option("--start", type=click.IntRange(min=0), default=0, show_default=True, help="First frame (from 0).")
 @click.option("--stop", type=click.IntRange(min=1), default=None, help="Stop before this frame (default: the end).")
@@ -100,7 +100,8 @@ def video(ctx, source, **options):
         with guarded_files([i for i in inputs if i], plan["csv"], options["checkpoint"], reports):
             drawn = [".png"] if plan["mp4"] or any(p.lower().endswith(".png") for p in plan["frames"]) else []
             check_png_outputs(drawn, frames.shape[::-1], options["png_width"], options["n_points"])
-            fps = options["fps"] or frames.fps or DEFAULT_FPS
+            # Every --step-th frame shown at the source's rate over --step: the clip keeps its duration.
+            fps = options["fps"] or (frames.fps or DEFAULT_FPS) / options["step"]
 
             def draw(points, density, fmt):
                 return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
