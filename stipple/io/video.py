@@ -11,7 +11,6 @@ import re
 import tempfile
 import zipfile
 from dataclasses import dataclass
-from fractions import Fraction
 from functools import partial
 
 import numpy as np
@@ -21,22 +20,13 @@ from ..errors import StippleError
 from .archive import MemberReader
 from .commit import StagedOutputs, atomic_write, write_stdout
 from .images import auto_levels, image_colour, image_density, load_colour, load_density
+from .mp4 import Mp4Stream, error_reason, require_av
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
 # Pillow's decompression-bomb limit, also for frames that PyAV decodes.
 MAX_FRAME_PIXELS = int(Image.MAX_IMAGE_PIXELS or 89_478_485)
 _FIELD = re.compile(r"%(0?[1-9][0-9]?)?d")
-NEEDS_PYAV = "needs PyAV: pip install 'stipple[video]'"
-
-
-def require_av(what):
-    """The ``av`` module, or a StippleError saying that ``what`` needs the ``video`` extra."""
-    try:
-        import av
-    except ImportError:
-        raise StippleError(f"{what} {NEEDS_PYAV}") from None
-    return av
 
 
 @dataclass
@@ -144,7 +134,7 @@ def _open_video(source, selection):
     except (av.FFmpegError, OSError, ValueError) as error:
         if isinstance(error, StippleError):
             raise
-        raise StippleError(f"{source}: not a video PyAV can read ({_reason(error)})") from None
+        raise StippleError(f"{source}: not a video PyAV can read ({error_reason(error)})") from None
     _check_size(source, shape)
     count = None if total is None else len(range(selection.start, min(total, selection.stop), selection.step))
     if count == 0:
@@ -179,7 +169,7 @@ def _video_frames(source, limit=None):
                 if limit is not None and yielded >= limit:
                     return
     except (av.FFmpegError, OSError) as error:
-        raise StippleError(f"{source.name}: cannot decode the video ({_reason(error)})") from None
+        raise StippleError(f"{source.name}: cannot decode the video ({error_reason(error)})") from None
 
 
 def _decoded(image, name, invert, gamma, levels, colour=False):
@@ -187,10 +177,6 @@ def _decoded(image, name, invert, gamma, levels, colour=False):
     if not colour:
         return image_density(image, invert=invert, gamma=gamma, levels=levels, name=name)
     return image_colour(image, name)
-
-
-def _reason(error):
-    return (getattr(error, "strerror", None) or str(error) or type(error).__name__).strip()
 
 
 def _check_size(name, shape):
@@ -351,50 +337,6 @@ def _write(stream, path, data):
         raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
 
 
-class Mp4Stream:
-    """An H.264 MP4 (MPEG-4 Part 2 where PyAV has no libx264) written frame by frame to ``temporary``.
-
-    Pictures are padded by their edge pixels to even sides (the yuv420p encoding needs them).
-    """
-
-    def __init__(self, temporary, path, fps):
-        self.av = require_av(f"{path}: writing MP4")
-        self.temporary, self.path, self.fps = temporary, path, fps
-        self.container = self.stream = None
-
-    def write(self, picture):
-        rgb = np.asarray(picture.convert("RGB"))
-        rgb = np.pad(rgb, ((0, rgb.shape[0] % 2), (0, rgb.shape[1] % 2), (0, 0)), mode="edge")
-        try:
-            if self.container is None:
-                self._open(rgb.shape)
-            frame = self.av.VideoFrame.from_ndarray(rgb, format="rgb24")
-            self.container.mux(self.stream.encode(frame))
-        except (self.av.FFmpegError, OSError) as error:
-            raise StippleError(f"{self.path}: cannot write the MP4 ({_reason(error)})") from None
-
-    def _open(self, shape):
-        codec = "libx264" if "libx264" in self.av.codecs_available else "mpeg4"
-        self.container = self.av.open(self.temporary, "w", format="mp4")
-        self.stream = self.container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
-        self.stream.height, self.stream.width = shape[:2]
-        self.stream.pix_fmt = "yuv420p"
-        if codec == "libx264":
-            self.stream.options = {"crf": "18"}
-
-    def close(self):
-        if self.container is None:
-            return
-        container, self.container = self.container, None
-        try:
-            try:
-                container.mux(self.stream.encode(None))
-            finally:
-                container.close()
-        except (self.av.FFmpegError, OSError) as error:
-            raise StippleError(f"{self.path}: cannot write the MP4 ({_reason(error)})") from None
-
-
 CHECKPOINT_FORMAT = "stipple-video-checkpoint"
 CHECKPOINT_VERSION = 1
 MAX_METADATA_BYTES = 1 << 24
@@ -433,7 +375,7 @@ def load_video_checkpoint(path, settings):
     except FileNotFoundError:
         raise StippleError(f"{path}: no checkpoint to resume") from None
     except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError, RuntimeError) as error:
-        raise StippleError(f"{path}: not a video checkpoint, or damaged ({_reason(error)})") from None
+        raise StippleError(f"{path}: not a video checkpoint, or damaged ({error_reason(error)})") from None
     if points.shape != (frames, count, 2) or not np.all((points >= 0) & (points <= 1)):
         raise StippleError(f"{path}: damaged video checkpoint (points of shape {points.shape} or outside [0, 1])")
     return points, metadata["indices"], metadata["fingerprints"]
