@@ -254,6 +254,17 @@ def test_a_frame_failing_mid_way_leaves_no_output(tmp_path):
     assert not (tmp_path / "d.csv").exists() and not list((tmp_path / "f").iterdir())
 
 
+def test_a_faint_clip_gets_the_torus_note_once_before_its_first_frame(tmp_path):
+    """stipple video said none of the notes stipple torus gives on the same frame (a held-out review)."""
+    faint = [0.4 + 0.2 * gray for gray in moving_disc(3)]  # gray values spanning a fifth of the range
+    source = frames_folder(tmp_path / "in", faint)
+    args = ["video", str(source), "-M", COUNT, "-N", BANDWIDTH, "--threads", "1", "-o", str(tmp_path / "d.csv")]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    assert result.output.count("gray values span only") == 1, result.output
+    assert "gray values span" not in CliRunner().invoke(main, [*args, "-q"]).output
+
+
 def test_a_folder_where_a_later_frame_goes_leaves_every_output_as_it_was(tmp_path):
     source = frames_folder(tmp_path / "in", moving_disc(4))
     (tmp_path / "f/2.png").mkdir(parents=True)  # only frame 2's file cannot be written

@@ -1,5 +1,6 @@
 """``stipple video``: a video or a sequence of frames stippled with the same dots, frame after frame."""
 
+import itertools
 import sys
 import time
 
@@ -19,6 +20,7 @@ from .options import (
     without,
 )
 from .supervise import SIGNALS, Progress, checkpoint_interval, guarded_files
+from .torus import tone_hints
 
 DEFAULT_FPS = 24.0
 
@@ -240,7 +242,7 @@ def run_frames(frames, settings, outputs, options):
     pictures = (
         frames.colours()
         if colour
-        else frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels)
+        else hinted(frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels), options)
     )
     progress.start()
     with SIGNALS.deferred() as interruption:
@@ -259,6 +261,17 @@ def run_frames(frames, settings, outputs, options):
         finally:
             progress.close()
     return result, interruption.signal
+
+
+def hinted(densities, options):
+    """``densities`` (``(index, density)`` per frame), with ``stipple torus``'s notes on the first frame (a faint or
+    a mostly dark image, tones the pen cannot reach) said before it is stippled."""
+    densities = iter(densities)
+    first = next(densities, None)
+    if first is None:
+        return densities
+    tone_hints(first[1], options)
+    return itertools.chain([first], densities)
 
 
 def finish(result, stopped_by, options, started):
