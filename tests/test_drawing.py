@@ -225,21 +225,27 @@ def test_the_globe_is_outlined_not_painted_gray(tmp_path):
     assert gray[(r > 0.98) & (r < 1.03)].min() < 230  # the ring
 
 
+def pen_sphere_drawing(count, projection, style, pen_mm):
+    """A 100 mm plotter drawing of ``count`` even dots on the sphere with a pen ``pen_mm`` wide: the drawing, its
+    one layer of dots and their pen paths' vertices."""
+    from stipple.design import fibonacci_lattice
+    from stipple.render.globe import sphere_drawing
+
+    points = fibonacci_lattice(count, np.random.default_rng(1), jitter=0.2)
+    lon_lat = (np.degrees(np.arctan2(points[:, 1], points[:, 0])), np.degrees(np.arcsin(points[:, 2])))
+    options = dict(width=(100.0, "mm"), dot_style=style, pen_width=(pen_mm, "mm"), style="plotter")
+    drawing = sphere_drawing(points, lon_lat, projection=projection, **options)
+    (dots,) = drawing.layers
+    return drawing, dots, np.concatenate([np.column_stack([path.real, path.imag]) for path in dots.paths])
+
+
 @pytest.mark.parametrize("projection", ["ortho", "equirect"])
 @pytest.mark.parametrize("style", ["point", "circle", "filled"])
 def test_pen_dots_never_touch_on_the_globe(style, projection):
     """Foreshortening brings dots near the limb closer but not the pen's width: 23 / 609 / 607 touching pairs of
     point / circle / filled dots on an orthographic globe of 3000 even dots with a 0.4 mm pen, 100 mm wide. The
     map was not thinned at all (a held-out sweep: 24 touching pairs of point dots)."""
-    from stipple.design import fibonacci_lattice
-    from stipple.render.globe import sphere_drawing
-
-    points = fibonacci_lattice(3000, np.random.default_rng(1), jitter=0.2)
-    lon_lat = (np.degrees(np.arctan2(points[:, 1], points[:, 0])), np.degrees(np.arcsin(points[:, 2])))
-    options = dict(width=(100.0, "mm"), dot_style=style, pen_width=(0.4, "mm"), style="plotter")
-    drawing = sphere_drawing(points, lon_lat, projection=projection, **options)
-    (dots,) = drawing.layers
-    vertices = np.concatenate([np.column_stack([path.real, path.imag]) for path in dots.paths])
+    drawing, dots, vertices = pen_sphere_drawing(3000, projection, style, 0.4)
     owner = np.repeat(np.arange(len(dots.paths)), [len(path) for path in dots.paths])
     close = cKDTree(vertices).query_pairs(drawing.pen_width, output_type="ndarray")
     assert not np.any(owner[close[:, 0]] != owner[close[:, 1]]), "two pen dots' ink touches"
@@ -251,15 +257,7 @@ def test_pen_dots_never_touch_on_the_globe(style, projection):
 def test_pen_dots_on_the_globe_and_the_map_stay_on_the_page(style, projection):
     """The map inset its dots by their radius only and the globe not at all: a 5 mm pen on a 100 mm globe of 500
     dots inked 1.4 mm past its edge, the map 0.8 mm past its with a 1.5 mm pen."""
-    from stipple.design import fibonacci_lattice
-    from stipple.render.globe import sphere_drawing
-
-    points = fibonacci_lattice(500, np.random.default_rng(1), jitter=0.2)
-    lon_lat = (np.degrees(np.arctan2(points[:, 1], points[:, 0])), np.degrees(np.arcsin(points[:, 2])))
-    options = dict(width=(100.0, "mm"), dot_style=style, pen_width=(5.0, "mm"), style="plotter")
-    drawing = sphere_drawing(points, lon_lat, projection=projection, **options)
-    (dots,) = drawing.layers
-    vertices = np.concatenate([np.column_stack([path.real, path.imag]) for path in dots.paths])
+    drawing, dots, vertices = pen_sphere_drawing(500, projection, style, 5.0)
     half_pen = drawing.pen_width / 2
     assert len(dots.paths) > 50
     assert np.all(vertices - half_pen >= -1e-9) and np.all(vertices + half_pen <= np.array(drawing.size) + 1e-9)
