@@ -213,10 +213,10 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
 
 def _check_aspect(drawn, reference, picture_source, input_source):
     """A picture is not a drawing of its input if its width : height differs from the input's by over 2 %, and
-    by more than the rounding of its height to whole pixels (a PNG of stipple's is ``round(W h / w)`` rows high:
-    a 1000×20 strip drawn 1024 wide is 1024×20, 2.4 % off)."""
+    is not what the rounding of its height to whole pixels makes (a PNG of stipple's is ``round(W h / w)`` rows
+    high: a 1000×20 strip drawn 1024 wide is 1024×20, 2.4 % off)."""
     (rows, columns), (height, width) = drawn[:2], reference[:2]
-    rounded = abs(rows - columns * height / width) <= 1
+    rounded = rows == max(int(round(columns * height / width)), 1)  # as ``stipple.io.png.png_canvas`` rounds
     if abs(np.log((columns / rows) / (width / height))) > 0.02 and not rounded:
         raise StippleError(
             f"{picture_source} is {columns}x{rows} pixels but {input_source} is {width}x{height}: "
