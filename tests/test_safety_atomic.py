@@ -46,12 +46,48 @@ def test_a_failed_rename_removes_the_remaining_temporaries(folder, monkeypatch):
     refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "cannot write")
 
 
-@pytest.mark.parametrize("failing_call", [2, 4, 6])
+@pytest.mark.parametrize("failing_call", [1, 2, 3])
 def test_a_rename_failing_after_others_puts_every_output_back(folder, monkeypatch, failing_call):
-    # Each existing target is set aside (one os.replace), then replaced (another): calls 2, 4 and 6 are the
-    # renames of a.csv, b.svg and c.png, so 4 and 6 fail after one or two outputs were already in place.
+    # Calls 1, 2 and 3 are the renames of a.csv, b.svg and c.png: 2 and 3 fail after one or two outputs were
+    # already in place.
     monkeypatch.setattr(os, "replace", failing_on_call(failing_call, os.replace))
     refused(["torus", "in.png", *FAST, *OUTPUTS], folder, "cannot write")
+
+
+def test_no_output_is_ever_missing_while_the_outputs_are_renamed(tmp_path, monkeypatch):
+    """A reader (or a crash) between two renames must find every target, old or new: setting the old files aside
+    by renaming them left each target missing for a moment."""
+    targets = [tmp_path / name for name in ("a.csv", "b.svg", "c.png")]
+    for target in targets:
+        target.write_text("old\n")
+    real = os.replace
+
+    def watched(source, destination):
+        assert all(target.exists() for target in targets)
+        real(source, destination)
+        assert all(target.exists() for target in targets)
+
+    monkeypatch.setattr(os, "replace", watched)
+    stipple.io.commit.commit_outputs([(target, b"new\n") for target in targets])
+    assert all(target.read_text() == "new\n" for target in targets) and not leftovers(tmp_path)
+
+
+def test_an_old_file_that_cannot_be_put_back_is_named_and_kept(tmp_path, monkeypatch):
+    (tmp_path / "a.csv").write_text("old a\n")
+    (tmp_path / "b.svg").write_text("old b\n")
+    real, calls = os.replace, []
+
+    def failing_from_the_second(source, destination):  # b.svg's rename fails, then putting a.csv back fails
+        calls.append(destination)
+        if len(calls) > 1:
+            raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+        real(source, destination)
+
+    monkeypatch.setattr(os, "replace", failing_from_the_second)
+    with pytest.raises(StippleError, match="b.svg: cannot write .Read-only file system.; the old file is kept as"):
+        stipple.io.commit.commit_outputs([(tmp_path / "a.csv", b"new a\n"), (tmp_path / "b.svg", b"new b\n")])
+    kept = [path for path in tmp_path.iterdir() if path.suffix == ".old"]
+    assert len(kept) == 1 and kept[0].read_text() == "old a\n" and (tmp_path / "b.svg").read_text() == "old b\n"
 
 
 def test_a_folder_made_where_a_staged_output_goes_is_refused_with_nothing_renamed(tmp_path):

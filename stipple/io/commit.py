@@ -3,6 +3,7 @@ checks made on output paths before a long run."""
 
 import contextlib
 import os
+import shutil
 import signal
 import sys
 import tempfile
@@ -119,7 +120,7 @@ class StagedOutputs:
 
     def commit(self):
         """Write stdout's share, then rename every staged file over its target: all of them, or (a rename refused)
-        none, every target replaced so far put back as it was."""
+        none of the files, every target replaced so far put back as it was (stdout's share is written by then)."""
         for temporary, path in self._temporaries:
             if temporary in self._reserved:
                 _fsync(temporary, path)
@@ -140,46 +141,70 @@ class StagedOutputs:
 
 
 def _replace_all(pairs):
-    """``os.replace`` every ``(temporary, path)`` of ``pairs``. Each existing target is first set aside beside
-    itself; if a rename fails, every target replaced so far gets its old file back (or is removed where there was
-    none) before the error is raised, and the set-aside copies are removed once all renames are done."""
+    """``os.replace`` every ``(temporary, path)`` of ``pairs``, all or none.
+
+    Each existing target is first kept under a second name beside it (a hard link, so the target itself never
+    goes missing: a reader or a crash sees the old file or the new one). If a rename fails, every target replaced
+    so far gets its old file back (or is removed where there was none) and the error names the output; a target
+    that cannot be put back keeps its old file under the second name, which the error names too. The second names
+    are removed once every rename is done.
+    """
     replaced = []
     try:
         for temporary, path in pairs:
-            replaced.append((path, _set_aside(path)))
+            replaced.append((path, _keep_previous(path)))
             os.replace(temporary, path)
     except OSError as error:
-        for done, previous in reversed(replaced):
-            _put_back(done, previous)
-        raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
+        kept = [previous for done, previous in reversed(replaced) if not _put_back(done, previous)]
+        also = f"; the old file is kept as {', '.join(kept)}" if kept else ""
+        raise StippleError(f"{path}: cannot write ({error.strerror or error}){also}") from None
     for _, previous in replaced:
         if previous is not None:
-            _remove(previous)
+            with contextlib.suppress(OSError):
+                _remove(previous)
 
 
-def _set_aside(path):
-    """Move the existing file ``path`` to a new hidden name beside it and return that name (None: no file)."""
+def _keep_previous(path):
+    """A second name beside the existing file ``path`` for it (a hard link, or a copy where the file system has
+    none), or None where there is no file."""
     if not os.path.lexists(path):
         return None
     handle, previous = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".stipple-", suffix=".old")
     os.close(handle)
+    os.unlink(previous)
     try:
-        os.replace(path, previous)
+        os.link(path, previous, follow_symlinks=False)
     except OSError:
-        _remove(previous)
-        raise
+        shutil.copy2(path, previous, follow_symlinks=False)
     return previous
 
 
 def _put_back(path, previous):
-    """Undo one rename of ``_replace_all``: the set-aside file back at ``path``, or no file where none was."""
-    if previous is None:
-        _remove(path)
-    else:
-        os.replace(previous, path)
+    """Undo one rename of ``_replace_all``: the old file back at ``path``, or no file where none was; False where
+    that fails (the old file then stays at ``previous``)."""
+    try:
+        if previous is None:
+            _remove(path)
+        elif _same_file(previous, path):  # never replaced (a rename over a hard link of itself would do nothing)
+            os.unlink(previous)
+        else:
+            os.replace(previous, path)
+    except OSError:
+        return False
+    return True
+
+
+def _same_file(first, second):
+    """Whether two names are links to one file (the links themselves, not what a symbolic link points to)."""
+    try:
+        one, other = os.lstat(first), os.lstat(second)
+    except FileNotFoundError:
+        return False
+    return (one.st_dev, one.st_ino) == (other.st_dev, other.st_ino)
 
 
 def _check_not_folder(path):
+    """Refuse an output whose place is taken by a folder (or a link to one)."""
     if os.path.isdir(path):
         raise StippleError(f"{path}: cannot write (it is a folder)")
 
