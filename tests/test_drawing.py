@@ -10,6 +10,7 @@ from PIL import Image
 from scipy.spatial import cKDTree
 
 from stipple.cli import main
+from stipple.errors import StippleError
 from stipple.render.dots import capped_radii, flat_dots, inset
 from stipple.render.pen import dot_paths
 
@@ -246,10 +247,15 @@ def test_pen_dots_never_touch_on_the_globe(style, projection):
     point / circle / filled dots on an orthographic globe of 3000 even dots with a 0.4 mm pen, 100 mm wide. The
     map was not thinned at all (a held-out sweep: 24 touching pairs of point dots)."""
     drawing, dots, vertices = pen_sphere_drawing(3000, projection, style, 0.4)
+    assert not inks_touch(drawing, dots, vertices), "two pen dots' ink touches"
+    assert len(dots.centres) > (1200 if projection == "ortho" else 2400)
+
+
+def inks_touch(drawing, dots, vertices):
+    """Whether two pen dots' paths come closer than the pen's width."""
     owner = np.repeat(np.arange(len(dots.paths)), [len(path) for path in dots.paths])
     close = cKDTree(vertices).query_pairs(drawing.pen_width, output_type="ndarray")
-    assert not np.any(owner[close[:, 0]] != owner[close[:, 1]]), "two pen dots' ink touches"
-    assert len(dots.centres) > (1200 if projection == "ortho" else 2400)
+    return bool(np.any(owner[close[:, 0]] != owner[close[:, 1]]))
 
 
 @pytest.mark.parametrize("projection", ["ortho", "equirect"])
@@ -259,8 +265,14 @@ def test_pen_dots_on_the_globe_and_the_map_stay_on_the_page(style, projection):
     dots inked 1.4 mm past its edge, the map 0.8 mm past its with a 1.5 mm pen."""
     drawing, dots, vertices = pen_sphere_drawing(500, projection, style, 5.0)
     half_pen = drawing.pen_width / 2
-    assert len(dots.paths) > 50
+    assert len(dots.paths) > 50 and not inks_touch(drawing, dots, vertices)
     assert np.all(vertices - half_pen >= -1e-9) and np.all(vertices + half_pen <= np.array(drawing.size) + 1e-9)
+
+
+def test_a_pen_too_wide_for_the_globe_is_refused_in_one_line():
+    """A 90 mm pen on a 100 mm globe: the globe made smaller to fit its dots turned inside out (a traceback)."""
+    with pytest.raises(StippleError, match="the pen is too wide for the globe"):
+        pen_sphere_drawing(10, "ortho", "point", 90.0)
 
 
 def test_the_tone_stroke_inks_the_mean_darkness_where_the_line_crosses_itself():

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..errors import StippleError
 from ..io.png import default_png_width
 from ..io.units import BLACK, WHITE
 from .dots import (
@@ -27,6 +28,10 @@ from .dots import (
 )
 from .drawing import Drawing
 from .flat import drawn_sizes, with_pen_paths
+
+# A pen drawing's globe is made smaller so that its limb dots stay on the canvas (``globe_fit``), but not below
+# this share of its size: a pen that needs more is refused.
+MIN_GLOBE_FIT = 0.5
 
 
 def sphere_drawing(
@@ -85,6 +90,11 @@ def sphere_drawing(
             f"{int(visible.sum())} of {len(points)} dots on the visible side (orthographic, view "
             f"{view[0]:g},{view[1]:g}; dots foreshortened towards the limb)"
         ]
+    globe = GLOBE
+    if projection == "ortho" and stroke is not None:
+        shrink = globe_fit(drawn, least)
+        drawn.centres = ORTHO_SIZE / 2 + (drawn.centres - ORTHO_SIZE / 2) * shrink
+        globe *= shrink
     if stroke is not None and fixed is None:
         # Foreshortening brings dots near the limb closer (and the map's inset those at its edges), but not the
         # pen's width: the pen's dots are kept apart on the drawing itself (thinned, and each dot's radius capped
@@ -94,28 +104,26 @@ def sphere_drawing(
         drawn.radii = np.minimum(drawn.radii, TOUCH_FRACTION * nearest_distances(drawn.centres))
         if left_out:
             warnings = [left_out_note(left_out, f"the {shown} dots shown")]
-    globe = GLOBE
-    if projection == "ortho" and stroke is not None:
-        drawn, shrink = fit_globe(drawn, least)
-        globe *= shrink
     layers = with_pen_paths([drawn], dot_style, pen)
     return _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings, globe)
 
 
-def fit_globe(dots, least):
-    """Pen dots of the orthographic globe, and the factor by which they were brought towards its centre (their
-    radii with them) so that every dot's ink (its radius, at least ``least``: ``pen_extent``) stays on the canvas;
-    1 where it already does. Near the limb the dots are foreshortened but the pen is not: a 5 mm pen on a 100 mm
-    globe inked 1.4 mm past the edge."""
+def globe_fit(dots, least):
+    """The factor (at most 1) by which the orthographic globe's dots must come towards its centre, their radii
+    kept, so that every dot's ink (its radius towards the limb, at least ``least``: ``pen_extent``) stays on the
+    canvas. Near the limb the dots are foreshortened but the pen is not: a 5 mm pen on a 100 mm globe inked
+    1.4 mm past the edge. The pen's dots are thinned after it, on the drawing as it will be."""
     half = ORTHO_SIZE / 2
     distance = np.hypot(*(dots.centres - half).T)
-    outward = dots.radii * dots.squash  # a dot's radius towards the limb, foreshortened
-    if not len(distance) or np.all(distance + np.maximum(outward, least) <= half):
-        return dots, 1.0
-    shrink = (half - least) / np.max(distance + outward)
-    dots.centres = half + (dots.centres - half) * shrink
-    dots.radii = dots.radii * shrink
-    return dots, shrink
+    reach = np.maximum(dots.radii * dots.squash, least)
+    outer = distance > 0
+    shrink = min(1.0, float(np.min((half - reach[outer]) / distance[outer], initial=1.0)))
+    if shrink < MIN_GLOBE_FIT:
+        raise StippleError(
+            f"the pen is too wide for the globe: its dots ink {np.max(reach) / half:.0%} of the globe's radius from "
+            "their centres; give a narrower --pen-width or a larger --width"
+        )
+    return shrink
 
 
 def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
