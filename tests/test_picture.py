@@ -209,6 +209,7 @@ def test_evaluate_measures_the_default_png_of_a_long_strip(tmp_path, shape):
     [
         (lambda d: (d / "bad.png").write_bytes(b"not a png") and d / "bad.png", "cannot decode"),
         (lambda d: save(d / "wide.png", ramp(10, 64)), "not the same width : height"),
+        (lambda d: save(d / "small.png", ramp(3, 2)), "not the same width : height"),  # a row off the rounding
     ],
 )
 def test_evaluate_refuses_a_bad_picture_in_one_line(tmp_path, make, message):

@@ -23,6 +23,7 @@ from .supervise import SIGNALS, Progress, checkpoint_interval, guarded_files
 from .torus import tone_hints
 
 DEFAULT_FPS = 24.0
+MIN_FPS = 0.01
 
 
 @click.command()
@@ -56,7 +57,7 @@ DEFAULT_FPS = 24.0
 )
 @click.option(
     "--fps",
-    type=click.FloatRange(min=0.01, max=1000),
+    type=click.FloatRange(min=MIN_FPS, max=1000),
     default=None,
     help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images, over --step: the same duration).",
 )
@@ -103,7 +104,7 @@ def video(ctx, source, **options):
             drawn = [".png"] if plan["mp4"] or any(p.lower().endswith(".png") for p in plan["frames"]) else []
             check_png_outputs(drawn, frames.shape[::-1], options["png_width"], options["n_points"])
             # Every --step-th frame shown at the source's rate over --step: the clip keeps its duration.
-            fps = options["fps"] or (frames.fps or DEFAULT_FPS) / options["step"]
+            fps = options["fps"] or max((frames.fps or DEFAULT_FPS) / options["step"], MIN_FPS)
 
             def draw(points, density, fmt):
                 return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
@@ -185,9 +186,9 @@ class FrameProgress(Progress):
         self.total = total
         self._refreshed = 0.0
 
-    def start(self):
+    def start(self, resume=False):
         if self.enabled:
-            self._open().set_postfix_str("the first frame: a cold run")
+            self._open().set_postfix_str("replaying the checkpoint" if resume else "the first frame: a cold run")
 
     def watch(self, state):
         """Every CG state of the frame under way: the bar redrawn (its clock) at most twice a second."""
@@ -244,7 +245,7 @@ def run_frames(frames, settings, outputs, options):
         if colour
         else hinted(frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels), options)
     )
-    progress.start()
+    progress.start(resume=options["resume"])
     with SIGNALS.deferred() as interruption:
         try:
             result = stipple_video(

@@ -27,6 +27,8 @@ UNWANTED_SHARE = 0.25
 # counted: its outermost pixels came out 25 % too light (a scanned page's right edge +0.038 in luminance, +0.007
 # inside; the portrait's sigma 4 px RMSE 0.0044 against 0.0035 with them).
 NEAR_WHITE = 0.02
+# How far the smallest pen dot of each style inks from its centre, in pens (``pen_extent``).
+PEN_EXTENTS = {"point": 0.6, "circle": 0.55, "filled": 0.6}
 
 
 @dataclass
@@ -81,6 +83,8 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, dot_style=N
     (``thin_apart``, all layers together) to ``least_pen_reach / TOUCH_FRACTION``, closer than which they would
     touch however small their radii; the layers hold only the dots kept.
     """
+    if pen is not None and dot_style not in PEN_EXTENTS:
+        raise ValueError(f"dot_style must be one of {', '.join(PEN_EXTENTS)} with a pen, not {dot_style!r}")
     least = 0.0 if pen is None else pen_extent(dot_style, pen)
     margin = max(radius if radius is not None else tone_radius, least)
     placed = []
@@ -123,7 +127,7 @@ def pen_extent(dot_style, pen):
     at the page's edge): a "point" is a stroke a tenth of the pen long from its centre, half the pen around it
     (0.6 of the pen); the smallest "circle" a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot the
     point's stroke (0.6). Until 2026-11-27 the margin was half the pen, and such dots crossed the page's edge."""
-    return {"point": 0.6, "circle": 0.55, "filled": 0.6}[dot_style] * pen
+    return PEN_EXTENTS[dot_style] * pen
 
 
 def thin_dots(dots, distance):
