@@ -254,6 +254,20 @@ def test_a_frame_failing_mid_way_leaves_no_output(tmp_path):
     assert not (tmp_path / "d.csv").exists() and not list((tmp_path / "f").iterdir())
 
 
+def test_outputs_that_fail_to_open_leave_no_temporary(tmp_path, monkeypatch):
+    """The CSV reserved before an MP4 that cannot be opened stayed behind as a .stipple-*.tmp."""
+    import stipple.io.video
+
+    def refused(*args):
+        raise StippleError("o.mp4: cannot write the MP4")
+
+    monkeypatch.setattr(stipple.io.video, "Mp4Stream", refused)
+    plan = {"csv": [str(tmp_path / "d.csv")], "mp4": [str(tmp_path / "o.mp4")], "frames": []}
+    with pytest.raises(StippleError, match="o.mp4"), stipple.io.video.VideoOutputs(plan, (10, 10), None, 24.0):
+        pass
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_faint_clip_gets_the_torus_note_once_before_its_first_frame(tmp_path):
     """stipple video said none of the notes stipple torus gives on the same frame (a held-out review)."""
     faint = [0.4 + 0.2 * gray for gray in moving_disc(3)]  # gray values spanning a fifth of the range

@@ -262,11 +262,15 @@ class VideoOutputs:
 
     def __enter__(self):
         self.staged.__enter__()
-        for path in self.plan["csv"]:
-            stream = tempfile.TemporaryFile() if path == "-" else open(self.staged.reserve(path), "wb")
-            stream.write(b"frame,x,y,layer\n" if self.layered else b"frame,x,y\n")
-            self.tables.append((path, stream))
-        self.movies = [Mp4Stream(self.staged.reserve(path), path, self.fps) for path in self.plan["mp4"]]
+        try:
+            for path in self.plan["csv"]:
+                stream = tempfile.TemporaryFile() if path == "-" else open(self.staged.reserve(path), "wb")
+                stream.write(b"frame,x,y,layer\n" if self.layered else b"frame,x,y\n")
+                self.tables.append((path, stream))
+            self.movies = [Mp4Stream(self.staged.reserve(path), path, self.fps) for path in self.plan["mp4"]]
+        except BaseException as error:
+            self.__exit__(type(error), error, error.__traceback__)  # what was reserved is removed
+            raise
         return self
 
     def __exit__(self, *exc):
