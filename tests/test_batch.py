@@ -314,3 +314,12 @@ def test_a_batch_of_images_and_maps_gives_each_its_own_transfer(tmp_path, transf
     result = CliRunner().invoke(main, [*arguments, "--iterations", "2", "--format", "csv", "-d", str(tmp_path / "o")])
     assert result.exit_code == 0, result.output
     assert sorted(os.listdir(tmp_path / "o")) == ["a.csv", "b.csv"]
+
+
+def test_batch_neither_offers_nor_takes_an_automatic_count(tmp_path):
+    """Its help offered '-M INTEGER|AUTO' and the run then refused 'auto' (a held-out review)."""
+    help_text = CliRunner().invoke(main, ["batch", "--help"]).output
+    assert "INTEGER|AUTO" not in help_text and "-M auto is for stipple torus" in " ".join(help_text.split())
+    result = CliRunner().invoke(main, ["batch", str(tmp_path / "a.png"), "-d", str(tmp_path / "out"), "-M", "auto"])
+    assert result.exit_code == 2 and "'auto' is not a valid integer" in result.output
+    assert not (tmp_path / "out").exists()

@@ -32,6 +32,7 @@ NOT_BATCH = {
 BATCH_HELP = {
     "quiet": "No progress bar or summary (failed images are still reported).",
     "verbose": "Also one line per image (iterations, energy, seconds).",
+    "n_points": "Number of dots of every image (-M auto is for stipple torus, one image at a time).",
 }
 
 
@@ -40,6 +41,8 @@ def torus_params():
     params = [copy.copy(param) for param in torus.params if param.name not in NOT_BATCH]
     for param in params:
         param.help = BATCH_HELP.get(param.name, param.help)
+        if param.name == "n_points":
+            param.type = click.INT
     return params
 
 
@@ -99,8 +102,6 @@ def plan(inputs, options):
     if options["init"] not in INITS:
         raise StippleError(f"--init for a batch must be one of {', '.join(INITS)}, not {options['init']!r}")
     check_integer("seed", options["seed"], 0, 2**63 - 1)
-    if options["n_points"] == "auto":
-        raise StippleError("-M auto is for stipple torus, one image at a time; give a batch -M as a number")
     if options["order"] == "progressive":
         raise StippleError("--order progressive is for stipple torus, one image at a time; use --order here")
     formats = parse_formats(options["formats"])
