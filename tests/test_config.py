@@ -32,6 +32,15 @@ def test_config_supplies_input_and_options(setup):
     assert len((setup / "dots.csv").read_text().splitlines()) == 41
 
 
+def test_one_output_may_be_given_as_a_string(setup):
+    """``output = "dots.csv"`` was refused as 'Value must be an iterable' (a held-out review)."""
+    text = 'input = "inputs/ramp.png"\npoints = 40\niterations = 3\nquiet = true\noutput = "dots.csv"\n'
+    config = write_config(setup / "job.toml", text)
+    result = run(["torus", "--config", config])
+    assert result.exit_code == 0, result.output
+    assert len((setup / "dots.csv").read_text().splitlines()) == 41
+
+
 def test_command_line_overrides_config(setup):
     config = write_config(
         setup / "job.toml", 'input = "inputs/ramp.png"\npoints = 40\nbandwidth = 12\niterations = 3\nquiet = true\n'
@@ -50,6 +59,7 @@ def test_command_line_overrides_config(setup):
         ("points = true", "key 'points'"),
         ("backend = 'fftw'", "key 'backend'"),
         ("uniform = true", "unknown key 'uniform'"),
+        ("palette = ['#ff0000', '#000000']", "expected one value, not a list"),
     ],
 )
 def test_config_errors_name_the_key(setup, line, message):

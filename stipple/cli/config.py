@@ -36,6 +36,7 @@ def load_config(ctx, param, value):
             raise click.BadParameter(f"unknown key {key!r} in {value}", ctx, param)
         if isinstance(item, bool) != getattr(parameters[name], "is_flag", False):
             raise click.BadParameter(f"key {key!r} in {value}: wrong type {type(item).__name__}", ctx, param)
+        item = _shaped(parameters[name], item, f"key {key!r} in {value}", ctx, param)
         converted = _convert(parameters[name], item, f"key {key!r} in {value}", ctx, param)
         if name in PATH_KEYS:
             converted = _resolve_paths(base, converted)
@@ -59,6 +60,16 @@ def _read_table(path, ctx, param):
         raise click.BadParameter(f"{path} is not UTF-8 text", ctx, param) from None
     except (tomllib.TOMLDecodeError, RecursionError) as error:
         raise click.BadParameter(f"{path} is not valid TOML: {error}", ctx, param) from None
+
+
+def _shaped(parameter, item, where, ctx, param):
+    """A repeatable option's one value as a list of one (``output = "a.csv"``); a list refused where the option
+    takes one value (``palette = ["red", "black"]`` was read as the text of the list)."""
+    if getattr(parameter, "multiple", False):
+        return [item] if not isinstance(item, list) else item
+    if isinstance(item, list) and parameter.nargs == 1:
+        raise click.BadParameter(f"{where}: expected one value, not a list", ctx, param)
+    return item
 
 
 def _convert(parameter, item, where, ctx, param):
