@@ -190,6 +190,21 @@ def test_evaluate_measures_colour_when_the_input_has_colour(tmp_path):
     assert json.loads(evaluate(source, source, "--json", "-", "--gray").output)["measures"] == "gray"
 
 
+def test_a_neutral_input_gets_no_chroma_ratio(tmp_path):
+    """A gray input's chroma is rounding noise: a CMY picture of it read "chroma 1255.673 of the input's"."""
+    gray = np.repeat(ramp()[..., None], 3, axis=2)
+    tinted = np.clip(gray + np.array([0.03, 0.0, -0.03]), 0, 1)
+    source, picture = save(tmp_path / "in.png", gray), save(tmp_path / "tinted.png", tinted)
+    report = evaluate(picture, source, "--colour")
+    assert report.exit_code == 0, report.output
+    assert "the input is neutral" in report.output and "of the input's" not in report.output
+    rows = json.loads(evaluate(picture, source, "--colour", "--json", "-").output)["stipple"]
+    assert all(row["chroma_ratio"] is None for row in rows) and all(row["delta_e00"] > 1 for row in rows)
+    colour = save(tmp_path / "c.png", colours())
+    coloured = json.loads(evaluate(colour, colour, "--json", "-").output)["stipple"]
+    assert all(row["chroma_ratio"] == pytest.approx(1.0) for row in coloured)
+
+
 @pytest.mark.parametrize("shape", [(20, 1000), (2, 500)])
 def test_evaluate_measures_the_default_png_of_a_long_strip(tmp_path, shape):
     """Its height rounded to whole pixels puts its width : height 2.4 % off the input's: it was refused."""

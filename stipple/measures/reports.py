@@ -240,12 +240,16 @@ def format_picture_report(report):
     return "\n".join(lines)
 
 
+def _chroma_text(ratio):
+    return "the input is neutral" if ratio is None else f"chroma {ratio:.3f} of the input's"
+
+
 def _picture_lines(name, measures):
     for row in measures:
         if "delta_e00" in row:
             yield (
                 f"{name}, sigma {row['sigma']:g} px: CIEDE2000 {row['delta_e00']:.2f} (95th percentile "
-                f"{row['delta_e00_p95']:.2f}), chroma {row['chroma_ratio']:.3f} of the input's, "
+                f"{row['delta_e00_p95']:.2f}), {_chroma_text(row['chroma_ratio'])}, "
                 f"mean L* difference {row['mean_L_difference']:+.2f}, luminance RMSE {row['luminance_rmse']:.4f}"
             )
             continue
