@@ -90,14 +90,18 @@ def plan_batch(images, out_dir, formats, recipe):
     ------
     StippleError
         If an image is stdin or a directory, two images share a stem (compared ignoring case, since they would
-        write the same files on a case-insensitive file system), or an output would overwrite an image.
+        write the same files on a case-insensitive file system), or an output would overwrite an image. The same
+        file given twice (two names, overlapping globs) is one job.
     """
-    jobs, stems = [], {}
+    jobs, stems, seen = [], {}, set()
     for image in images:
         if str(image) == "-":
             raise StippleError("batch reads image files, not stdin ('-')")
         if os.path.isdir(image):
             raise StippleError(f"{image}: is a directory; give its images (e.g. {os.path.join(image, '*.png')})")
+        if _identity(image) in seen:  # the same file twice (overlapping globs): stippled once
+            continue
+        seen.add(_identity(image))
         stem = os.path.splitext(os.path.basename(image))[0]
         if stem.casefold() in stems:
             raise StippleError(
@@ -111,6 +115,15 @@ def plan_batch(images, out_dir, formats, recipe):
         [("image", job.image) for job in jobs], [("output", path) for job in jobs for _, path in job.outputs]
     )
     return jobs
+
+
+def _identity(path):
+    """What makes two names the same file: its device and inode, or for a missing file its real path."""
+    try:
+        status = os.stat(path)
+    except OSError:
+        return os.path.realpath(path)
+    return (status.st_dev, status.st_ino)
 
 
 def is_done(job):
