@@ -120,3 +120,21 @@ def test_two_quick_signals_in_a_run_leave_a_whole_checkpoint(folder):
     after = snapshot(folder)
     changed = {name for name in ("a.csv", "b.svg", "c.png") if after[name] != before[name]}
     assert changed in (set(), {"a.csv", "b.svg", "c.png"})
+
+
+def test_a_second_signal_after_the_first_is_ignored_on_the_way_out():
+    """A batch stopped by SIGINT printed a KeyboardInterrupt traceback now and then: ``timeout`` signals the
+    process and its group, and the second signal came while Python waited for the pool's threads at exit."""
+    from stipple.cli.supervise import SignalGuard
+
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        guard = SignalGuard()
+        with guard, guard.deferred():
+            guard._handle(signal.SIGINT, None)  # the first signal, as the handler receives it
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    with SignalGuard():  # no signal: the handler from before is back
+        pass
+    assert signal.getsignal(signal.SIGINT) == previous

@@ -81,8 +81,11 @@ class SignalGuard:
         return self
 
     def __exit__(self, *exc):
+        # After a signal the command only exits: a second one (a second Ctrl-C, or ``timeout``'s signal to the
+        # process group) is ignored, else it interrupts the interpreter's wait for worker threads with a traceback.
+        stopping = self.signal is not None or self.unwinding
         for number, handler in self._previous.items():
-            signal.signal(number, handler)
+            signal.signal(number, signal.SIG_IGN if stopping else handler)
         self._previous.clear()
 
     def _handle(self, number, frame):
