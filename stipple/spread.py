@@ -35,7 +35,7 @@ def hexagonal_spacing_at(points, weights):
     """Per dot (unit coordinates), the spacing in pixels of a hexagonal packing at the density of its pixel
     (``M w / sum(w)`` dots per pixel; infinite in pixels of zero density)."""
     density = len(points) * weights[pixel_indices(points, weights.shape)] / weights.sum()
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):
         return hexagonal_spacing(density, 1.0)
 
 

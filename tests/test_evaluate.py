@@ -322,3 +322,15 @@ def test_options_a_kind_of_points_does_not_use_are_refused(made, arguments, mess
     """A held-out sweep found them accepted and ignored: the same output, exit 0."""
     result = CliRunner().invoke(main, ["evaluate", *(str(made / a) if "." in a else a for a in arguments)])
     assert result.exit_code == 1 and message in result.output, result.output
+
+
+def test_the_local_spacing_of_a_vanishing_density_is_infinite_without_a_warning():
+    """A map's tails of 1e-35 made evaluate print numpy's 'overflow encountered in divide' (a held-out review)."""
+    import warnings
+
+    from stipple.measures.evaluate import local_spacing
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        spacing = local_spacing(np.array([1e-320, 0.0, 2 / np.sqrt(3)]))
+    assert np.isinf(spacing[:2]).all() and spacing[2] == pytest.approx(1.0)

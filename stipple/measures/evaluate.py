@@ -175,8 +175,9 @@ def percentiles(ratios):
 
 
 def local_spacing(density):
-    """Spacing of a hexagonal packing with ``density`` points per unit area (``inf`` where it is 0)."""
-    with np.errstate(divide="ignore"):
+    """Spacing of a hexagonal packing with ``density`` points per unit area (``inf`` where it is 0, or so small
+    that the division overflows: a map's tails of 1e-35)."""
+    with np.errstate(divide="ignore", over="ignore"):
         return hexagonal_spacing(density, 1.0)
 
 
