@@ -173,12 +173,6 @@ def test_auto_refusals_on_the_command_line(tmp_path, extra, message):
     assert not (tmp_path / "o.svg").exists()
 
 
-def test_batch_refuses_auto(tmp_path):
-    image = flat_gray(tmp_path, 0.3, size=16)
-    result = CliRunner().invoke(main, ["batch", str(image), "-d", str(tmp_path / "out"), "-M", "auto"])
-    assert result.exit_code != 0 and "-M auto" in result.output and "Traceback" not in result.output
-
-
 def test_vpype_plugin_auto_count(tmp_path):
     pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
     import vpype_cli
