@@ -152,6 +152,15 @@ def as_density(weights, lon0=0.0):
     return CellMap(weights, lon0)
 
 
+def unit_peak(density):
+    """A map scaled to a largest value of 1 (the problem is the same at any scale; maps are read so, but a pen's
+    clip, ``stipple.pipelines.pen.sphere_pen_density``, can bring one to 5e-36, where the single-precision
+    derivatives underflow: 20 iterations, the dots in two clusters); other densities as they are."""
+    if not isinstance(density, CellMap) or density.values.max() in (0.0, 1.0):
+        return density
+    return CellMap(density.values / density.values.max(), density.lon0)
+
+
 def sphere_problem(
     weights,
     n_points,
@@ -178,7 +187,7 @@ def sphere_problem(
     kernel keep their bandwidth, the plain metric, their start and ``epsilon`` throughout (``derivative_epsilon``
     is ignored there).
     """
-    density = as_density(weights, lon0)
+    density = unit_peak(as_density(weights, lon0))
     n_points = check_count(n_points)
     kernel = default_kernel(density, n_points) if kernel is None else kernel
     near_field = kernel.startswith("distance") if near_field is None else bool(near_field)
