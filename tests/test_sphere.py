@@ -4,6 +4,7 @@ import scipy.special as sp
 from conftest import assert_derivatives_alike, taylor_slope
 from scipy.special import roots_legendre
 
+from stipple.errors import StippleError
 from stipple.halftone import run
 from stipple.manifolds import ScaledSphere, Sphere
 from stipple.sphere import (
@@ -406,3 +407,17 @@ def test_stratified_start_gives_every_stretch_of_the_curve_its_share(rng):
     mass = values * cells.cell_areas
     left = mass[:, :16].sum() / mass.sum()
     assert abs(np.sum(column < 16) - 1001 * left) <= 1.0
+
+
+def test_a_map_too_large_for_the_memory_is_refused_before_any_work(monkeypatch):
+    """A 4-degree peak at M = 2e7 needed over 22 GiB and was killed by the kernel on a machine with 22.8 GiB
+    available, which the memory check had let through (16.8 GiB estimated: a held-out review)."""
+    import stipple.allocator
+
+    latitude = np.radians(89.5 - np.arange(180))[:, None]
+    longitude = np.radians(np.arange(360) + 0.5)[None, :]
+    angle = np.degrees(np.arccos(np.clip(np.cos(latitude) * np.cos(longitude - np.pi), -1, 1)))
+    peak = np.exp(-0.5 * (angle / 4.0) ** 2)
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 22.8 * 2**30)
+    with pytest.raises(StippleError, match="needs about .* GiB of memory"):
+        sphere_problem(peak, 20_000_000)
