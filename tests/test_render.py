@@ -164,6 +164,16 @@ def test_render_rejects_unknown_csv(tmp_path):
     assert result.exit_code == 1 and "expected a CSV with header" in result.output
 
 
+@pytest.mark.parametrize("row", ["10,20,30", "10"])
+def test_render_refuses_a_row_with_more_or_fewer_fields_than_its_header(tmp_path, row):
+    """``lon,lat`` over ``10,20,30`` was read as the point (10, 20), the third field dropped (a held-out review)."""
+    points = tmp_path / "p.csv"
+    points.write_text(f"lon,lat\n{row}\n40,50\n")
+    result = CliRunner().invoke(main, ["render", str(points), "-o", str(tmp_path / "a.png")])
+    assert result.exit_code == 1 and "malformed CSV row 2 (the header names 2 fields)" in result.output
+    assert not (tmp_path / "a.png").exists()
+
+
 def test_order_shortens_the_pen_path(torus_csv, tmp_path):
     image, _ = torus_csv
     arguments = ["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "--init", "density", "--order"]
