@@ -83,6 +83,8 @@ def test_uniform_and_builtins():
         (["sphere", "--uniform", "--invert", "--gamma", 3], "--gamma transforms a map's or an image's values, not"),
         (["sphere", "--uniform", "--kernel", "gauss"], "kernel must be"),
         (["sphere", "--uniform", "--view", "10"], "view must be LON,LAT"),
+        (["sphere", "--uniform", "--projection", "equirect", "--view", "30,45"], "centred on a longitude only"),
+        (["design", "-t", 4, "--projection", "equirect", "--view", "0,10"], "centred on a longitude only"),
         (["sphere", "--uniform", "-N", 0], "bandwidth (degree) must be an integer"),
     ],
 )

@@ -93,7 +93,7 @@ def design(ctx, **options):
         if not 0 < options["error"] < 1:
             raise StippleError(f"error must be a number in (0, 1), not {options['error']!r}")
         settings = render_settings(options)
-        view = parse_view(options["view"])
+        view = parse_view(options["view"], options["projection"])
         init_file = [] if options["init"] in STARTS else [("--init file", options["init"])]
         with guarded_files(init_file, options["outputs"], options["checkpoint"]):
             epsilon = DESIGN_EPSILON if options["epsilon"] is None else options["epsilon"]

@@ -355,13 +355,20 @@ def init_input(init):
     return None if init in INITS else ("--init file", init)
 
 
-def parse_view(text):
+def parse_view(text, projection="ortho"):
+    """``--view LON,LAT`` in degrees; the equirectangular map is centred on a longitude only (a latitude there
+    was silently ignored)."""
     try:
         lon, lat = (float(part) for part in text.split(","))
     except ValueError:
         raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
     if not (-90 <= lat <= 90 and math.isfinite(lon)):
         raise StippleError(f"view must be a finite longitude and a latitude in [-90, 90], not {text!r}")
+    if projection == "equirect" and lat != 0:
+        raise StippleError(
+            f"view {text}: the equirectangular map is centred on a longitude only; give {lon:g},0 (a latitude is "
+            "for the globe, --projection ortho)"
+        )
     return lon, lat
 
 

@@ -79,7 +79,7 @@ def render(
     png_width = options["png_width"]
     try:
         settings = render_settings(options)
-        angles = parse_view(view)
+        angles = parse_view(view, projection)
         formats = [output_format(path) for path in outputs]
         if like is not None and size is not None:
             raise StippleError("give --like or --size, not both (--like's image has its own size)")

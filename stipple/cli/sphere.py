@@ -77,7 +77,7 @@ def sphere(ctx, map_source, **options):
     try:
         settings = render_settings(options)
         lon0 = check_longitude("lon0", options["lon0"])
-        view = parse_view(options["view"] or default_view(options["projection"], lon0))
+        view = parse_view(options["view"] or default_view(options["projection"], lon0), options["projection"])
         formats = [output_format(path) for path in options["outputs"]]
         check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
         inputs = [("map", map_source), init_input(options["init"])]
