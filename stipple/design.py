@@ -14,6 +14,8 @@ separate the points themselves (c = 0.55: 0.64) and lattice starts are slow (697
 are the start there.
 """
 
+from dataclasses import replace
+
 import numpy as np
 
 from .errors import StippleError
@@ -28,6 +30,9 @@ TARGET_ERROR = 1e-10
 # CG's relative-gradient stop, far below what the error target needs: a floor for targets the transforms'
 # accuracy cannot reach.
 GRADIENT_FLOOR = 1e-14
+# ... and a run whose energy stops falling (less than this fraction of it over ``SETTLE_WINDOW`` iterations) has
+# stalled: t = 3 with 5 points sat at a relative gradient of 1.4e-14, above the floor, for all 20000 iterations.
+DESIGN_SETTLE = 1e-12
 # Start on the jittered Fibonacci lattice from this many points per harmonic on; i.i.d. uniform below.
 LATTICE_FROM = 0.65
 LATTICE_JITTER = 0.1
@@ -113,9 +118,10 @@ def design_problem(strength, n_points=None, *, threads=None, epsilon=DESIGN_EPSI
             f"number of points must be at least (t+1)^2/4 = {(strength + 1) ** 2 // 4} for strength {strength} "
             f"(designs need about (t+1)^2/2 points), not {n_points}"
         )
-    return sphere_problem(
+    problem = sphere_problem(
         None, n_points, strength, kernel=DESIGN_KERNEL, threads=threads, epsilon=epsilon, near_field=False
     )
+    return replace(problem, settle=DESIGN_SETTLE)
 
 
 def spherical_design(
@@ -199,13 +205,14 @@ def design_outcome(result, target, accurate=None):
         result.status = "converged"
         result.message = f"largest error {target.largest:.3g} <= {target.error:g} after {result.iterations} iterations"
         return result
-    if result.status == "converged" and target.largest < ROUNDING_FLOOR:  # as close as double precision gets
+    stuck = result.status in ("converged", "settled")  # the gradient vanished, or the energy stopped falling
+    if stuck and target.largest < ROUNDING_FLOOR:  # as close as double precision gets
         result.status = "stalled"
         result.message = (
             f"stopped at the floating-point floor after {result.iterations} iterations (a design to rounding; "
             f"a tighter --error than about {ROUNDING_FLOOR:g} cannot be reached in double precision)"
         )
-    elif result.status == "converged":  # the gradient vanished away from a design: a local minimum
+    elif stuck:  # away from a design: a local minimum
         result.status = "stalled"
         result.message = (
             f"stalled at a local minimum after {result.iterations} iterations (not a design; for small t some "

@@ -194,3 +194,10 @@ def test_the_rounding_floor_is_not_called_a_local_minimum():
     """--error 1e-20 stalls at the rounding floor (6.6e-14 for t = 20): it said "local minimum (not a design)"."""
     floor = CliRunner().invoke(main, ["design", "-t", "20", "--error", "1e-20", "--threads", "1", "-q", "-o", "-"])
     assert floor.exit_code == 3 and "floating-point floor" in floor.output and "local minimum" not in floor.output
+
+
+def test_a_stall_above_the_gradient_floor_is_found_by_the_energy():
+    """t = 3 with 5 points sat at a relative gradient of 1.4e-14, just above the floor, and ran all 20000
+    iterations (8 s) before saying it reached them (a held-out review)."""
+    result = spherical_design(3, 5, threads=1)
+    assert result.status == "stalled" and "local minimum" in result.message and result.iterations < 1000
