@@ -113,9 +113,10 @@ def design_problem(strength, n_points=None, *, threads=None, epsilon=DESIGN_EPSI
     """The ``Problem`` of a design of strength t with ``n_points`` points (default ``design_points(t)``)."""
     strength = check_strength(strength)
     n_points = design_points(strength) if n_points is None else n_points
-    if isinstance(n_points, (int, np.integer)) and 0 < n_points < (strength + 1) ** 2 // 4:
+    fewest = -(-((strength + 1) ** 2) // 4)  # (t+1)^2/4 rounded up: t = 2 needs 3 points, not 2
+    if isinstance(n_points, (int, np.integer)) and 0 < n_points < fewest:
         raise StippleError(
-            f"number of points must be at least (t+1)^2/4 = {(strength + 1) ** 2 // 4} for strength {strength} "
+            f"number of points must be at least (t+1)^2/4, rounded up: {fewest} for strength {strength} "
             f"(designs need about (t+1)^2/2 points), not {n_points}"
         )
     problem = sphere_problem(

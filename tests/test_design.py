@@ -126,6 +126,7 @@ def test_unreachable_target_says_so():
     [
         ({"strength": 0}, "strength"),
         ({"strength": 10, "n_points": 5}, "at least"),
+        ({"strength": 2, "n_points": 2}, "rounded up: 3"),  # (t+1)^2/4 = 2.25: 2 was let through as "= 2"
         ({"strength": 10, "error": 2.0}, "error"),
         ({"strength": 10, "init": "grid"}, "init"),
     ],
