@@ -175,6 +175,11 @@ def picture_report(picture_source, input_source, *, colour=None, sigmas=SIGMAS, 
     ``1 - w`` (``w`` with ``invert``: white dots on black). ``dots``: also measure Floyd-Steinberg error
     diffusion with about that many dots.
     """
+    if str(input_source).startswith("builtin:"):
+        raise StippleError(
+            f"{input_source}: a picture is measured against the image or map file it was drawn from, not a built-in "
+            "density (its points are: stipple evaluate POINTS.csv builtin:NAME)"
+        )
     drawn = load_colour(picture_source, name=str(picture_source))
     data = read_source(source_or_stdin(input_source))
     name = STDIN_NAME if input_source == "-" else str(input_source)
