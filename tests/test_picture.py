@@ -232,3 +232,11 @@ def test_evaluate_refuses_a_bad_picture_in_one_line(tmp_path, make, message):
     result = evaluate(make(tmp_path), source)
     assert result.exit_code == 1 and message in result.output
     assert len(result.output.strip().splitlines()) == 1
+
+
+def test_a_picture_against_a_built_in_density_is_refused_in_one_line(tmp_path):
+    """It said 'cannot read builtin:gaussians: No such file or directory' (a held-out review)."""
+    picture = save(tmp_path / "p.png", ramp(32, 64))
+    result = evaluate(picture, "builtin:gaussians")
+    assert result.exit_code == 1 and "not a built-in density" in result.output
+    assert len(result.output.strip().splitlines()) == 1
