@@ -170,8 +170,16 @@ def test_render_refuses_a_row_with_more_or_fewer_fields_than_its_header(tmp_path
     points = tmp_path / "p.csv"
     points.write_text(f"lon,lat\n{row}\n40,50\n")
     result = CliRunner().invoke(main, ["render", str(points), "-o", str(tmp_path / "a.png")])
-    assert result.exit_code == 1 and "malformed CSV row 2 (the header names 2 fields)" in result.output
-    assert not (tmp_path / "a.png").exists()
+    assert result.exit_code == 1 and "malformed CSV row 2 (" in result.output
+    assert "fields, the header names 2)" in result.output and not (tmp_path / "a.png").exists()
+
+
+def test_render_names_a_field_that_is_not_a_number(tmp_path):
+    """A row of the right length with 'foo' in it was said to have the wrong number of fields."""
+    points = tmp_path / "p.csv"
+    points.write_text("x,y\n1,2\nfoo,3\n")
+    result = CliRunner().invoke(main, ["render", str(points), "-o", str(tmp_path / "a.png")])
+    assert result.exit_code == 1 and "malformed CSV row 3 (not a number): 'foo,3'" in result.output
 
 
 def test_order_shortens_the_pen_path(torus_csv, tmp_path):

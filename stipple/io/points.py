@@ -48,15 +48,16 @@ def read_points_csv(source, names):
     indices = [header.index(column) for column in names]
     rows = []
     for number, line in enumerate(lines[1:], start=2):
-        try:
-            cells = line.split(",")
-            if len(cells) != len(header):  # a field more or less than the header names: not this table's row
-                raise ValueError
-            rows.append([float(cells[i]) for i in indices])
-        except (ValueError, IndexError):
+        cells = line.split(",")
+        if len(cells) != len(header):  # a field more or less than the header names: not this table's row
             raise StippleError(
-                f"{name}: malformed CSV row {number} (the header names {len(header)} fields): {line[:80]!r}"
-            ) from None
+                f"{name}: malformed CSV row {number} ({len(cells)} fields, the header names {len(header)}): "
+                f"{line[:80]!r}"
+            )
+        try:
+            rows.append([float(cells[i]) for i in indices])
+        except ValueError:
+            raise StippleError(f"{name}: malformed CSV row {number} (not a number): {line[:80]!r}") from None
     points = np.array(rows, dtype=np.float64).reshape(-1, len(names))
     if len(points) == 0:
         raise StippleError(f"{name}: no points")
