@@ -464,3 +464,13 @@ def test_the_clip_level_is_found_however_many_decades_the_density_spans(allowed)
     level = clipped_density(darkness, allowed).max()
     assert level < 1.0 and level / np.mean(np.minimum(darkness, level)) == pytest.approx(allowed, rel=1e-9)
     assert (level < 1e-30) == (allowed < 3)
+
+
+def test_auto_count_with_a_fixed_dot_radius_is_refused(tmp_path):
+    """-M auto counts the pen's smallest dots; with --dot-radius 1mm every one was drawn 1 mm wide, 7884 pairs of
+    them touching, the picture nearly black (a held-out review)."""
+    image = flat_gray(tmp_path, 0.3, size=16)
+    args = ["torus", str(image), "-M", "auto", "--dot-style", "filled", "--pen-width", "0.5mm", "--dot-radius", "1mm"]
+    result = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "a.svg")])
+    assert result.exit_code == 1 and "-M auto counts the pen's smallest dots" in result.output
+    assert not (tmp_path / "a.svg").exists()

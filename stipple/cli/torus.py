@@ -61,6 +61,9 @@ def torus(ctx, image, **options):
         raise click.UsageError("missing IMAGE (or 'input' in --config)")
     try:
         check_palette_extras(options["palette"], options["black"], options["union_weight"])
+        if options["n_points"] == "auto" and options["dot_radius"] is not None:
+            # The count is the pen's smallest dots' (docs/plotters.md); dots of a fixed size overlapped in thousands.
+            raise StippleError("-M auto counts the pen's smallest dots; with --dot-radius give the number of dots")
         if options["palette"] is not None:
             from ..pipelines.colour import stipple_colour
 
