@@ -357,3 +357,14 @@ def test_a_png_less_than_a_pixel_high_is_refused_or_drawn_on_one_row():
     line = render_line(np.array([[10.0, 1.0], [8990.0, 1.0]]), (9000, 2), 2048, 1.0, closed=False)
     assert line.size == (2048, 1)
     assert np.asarray(line).min() < 255
+
+
+@pytest.mark.parametrize(
+    "colours", [["--invert", "--background", "white"], ["--background", "#fff", "--color", "white"]]
+)
+def test_dots_the_colour_of_the_background_are_refused(ramp, tmp_path, colours):
+    """--invert draws white dots; with --background white every pixel of the picture was white (a held-out
+    review)."""
+    result = CliRunner().invoke(main, ["torus", str(ramp), "-M", 50, *colours, "-o", str(tmp_path / "a.png")])
+    assert result.exit_code == 1 and "the same colour: nothing would show" in result.output
+    assert not (tmp_path / "a.png").exists()

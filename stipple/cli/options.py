@@ -306,12 +306,19 @@ def render_settings(options):
 
     invert = bool(options.get("invert"))
     background, color = options.get("background"), options.get("color")
+    background = parse_colour(background, "background") if background else (BLACK if invert else WHITE)
+    color = parse_colour(color, "color") if color else (WHITE if invert else BLACK)
+    if color == background:  # --invert --background white drew white dots on white: a blank picture
+        raise StippleError(
+            f"the dots (--color{', white under --invert' if invert and not options.get('color') else ''}) and the "
+            "--background are the same colour: nothing would show"
+        )
     return {
         "width": parse_length(options["width"], "width"),
         "dot_radius": dot_radius(options),
         "png_width": options["png_width"],
-        "background": parse_colour(background, "background") if background else (BLACK if invert else WHITE),
-        "color": parse_colour(color, "color") if color else (WHITE if invert else BLACK),
+        "background": background,
+        "color": color,
         "dot_style": options["dot_style"],
         "pen_width": parse_length(options["pen_width"], "pen-width"),
         "style": drawing_style(options.get("style"), options["dot_style"]),
