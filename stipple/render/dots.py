@@ -13,6 +13,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from ..errors import StippleError
 from ..tone import fit_inside, tone_radii_layers
 from ..tone.radii import canvas_pixels
 from ..tone.wrap import wrapped_copies
@@ -27,6 +28,9 @@ UNWANTED_SHARE = 0.25
 # counted: its outermost pixels came out 25 % too light (a scanned page's right edge +0.038 in luminance, +0.007
 # inside; the portrait's sigma 4 px RMSE 0.0044 against 0.0035 with them).
 NEAR_WHITE = 0.02
+# The largest inset from a flat page's edges, over its shorter side (``inset``); a pen whose smallest dots need
+# more is refused (``flat_dots``).
+MAX_MARGIN = 0.25
 # How far the smallest pen dot of each style inks from its centre, in pens (``pen_extent``).
 PEN_EXTENTS = {"point": 0.6, "circle": 0.55, "filled": 0.6}
 
@@ -68,9 +72,10 @@ def capped_radii(distances, tone_radius, fraction=TOUCH_FRACTION):
 
 def inset(centres, size, margin):
     """Positions on a ``size = (width, height)`` canvas mapped affinely onto the canvas shrunk by ``margin`` on
-    every side, so that a dot of radius up to ``margin`` stays inside (at most a quarter of the shorter side)."""
+    every side, so that a dot of radius up to ``margin`` stays inside (at most ``MAX_MARGIN`` of the shorter
+    side)."""
     extent = np.asarray(size, dtype=np.float64)
-    margin = min(float(margin), 0.25 * extent.min())
+    margin = min(float(margin), MAX_MARGIN * extent.min())
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
 
 
@@ -86,6 +91,12 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, dot_style=N
     if pen is not None and dot_style not in PEN_EXTENTS:
         raise ValueError(f"dot_style must be one of {', '.join(PEN_EXTENTS)} with a pen, not {dot_style!r}")
     least = 0.0 if pen is None else pen_extent(dot_style, pen)
+    if least > MAX_MARGIN * min(size):  # the inset stops there: a 500 mm pen inked far past a 300-unit page
+        raise StippleError(
+            f"the pen is too wide for the page: its dots ink {least:.4g} units from their centres, more than "
+            f"{MAX_MARGIN:g} of the page's shorter side ({min(size):.4g}); give a narrower --pen-width or a larger "
+            "--width"
+        )
     margin = max(radius if radius is not None else tone_radius, least)
     placed = []
     for name, colour, centres in layers:
