@@ -68,6 +68,16 @@ def test_init_from_csv_continues_from_those_points(image_path, tmp_path):
     assert result.stdout == start.read_text()
 
 
+def test_an_init_made_for_another_image_is_warned_about(image_path, tmp_path):
+    """A start from a larger image's run wrapped around without a word (1764 of 5000 points outside; stipple
+    render warns about the same file: a held-out review)."""
+    start = tmp_path / "start.csv"
+    start.write_text("x,y\n1.5,2.5\n30.5,4.5\n10.5,20.5\n")  # the ramp is 24 x 16 pixels
+    args = ["torus", image_path, "-M", 3, "-N", 12, "--iterations", 0, "--init", start, "-o", tmp_path / "a.csv"]
+    assert "2 of 3 points lie outside the 24×16 image" in run(args).stderr
+    assert "outside" not in run([*args, "-q"]).stderr
+
+
 @pytest.mark.parametrize(
     "extra,message",
     [
