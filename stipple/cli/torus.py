@@ -3,7 +3,6 @@
 import time
 
 import click
-import numpy as np
 
 from ..errors import StippleError
 from .options import (
@@ -88,6 +87,8 @@ def torus(ctx, image, **options):
 def init_outside(shape, options):
     """A warning when ``--init``'s points (a CSV in pixels) lie outside the image, as ``stipple render`` gives: a
     start made for another image (5000 points of a 300 x 200 run, 1764 outside a 200 x 200 image) wraps around."""
+    import numpy as np
+
     from ..pipelines.inputs import INITS, read_points
 
     if options["quiet"] or options["init"] in INITS:
