@@ -385,6 +385,16 @@ def check_extension(option, path, extension):
         raise StippleError(f"{path}: {option} writes {extension} files; the name must end in {extension}")
 
 
+def warn_beyond(pixels, shape, options, consequence):
+    """``warn_outside`` for pixel positions and the ``shape = (H, W)`` image they are used with (``stipple render``'s
+    ``--like`` or ``--size``, ``stipple torus``'s ``--init``), unless ``--quiet``."""
+    from ..measures.reports import outside
+
+    if not options["quiet"]:
+        found = outside(pixels, shape)
+        warn_outside(found["points_outside"], len(pixels), found["image_size"], consequence)
+
+
 def warn_outside(count, total, size, consequence):
     """A warning on stderr when ``count`` of ``total`` points lie outside the ``size = (W, H)`` image they are used
     with (points made for another image, which the torus wraps around), ending with ``consequence``."""

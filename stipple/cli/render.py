@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import look_options, parse_levels, parse_view, render_settings, warn_outside
+from .options import look_options, parse_levels, parse_view, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
 
 
@@ -125,7 +125,7 @@ def render(
                 darkness = placement_density(darkness, len(points), settings)
             check_png_outputs(formats, shape[::-1], png_width, len(points))
             if like is not None or size is not None:
-                warn_beyond(points, shape, options)
+                warn_beyond(points, shape, options, "drawn wrapped onto it")
             points = wrapped
             unit = points / np.array([shape[1], shape[0]])
             unit = plot_order(physical_centres(unit, shape, settings["width"]), unit, options, settings["width"][1])
@@ -159,15 +159,5 @@ def redraw(pixels, names, formats, like, size, separation, options):
         pixels, names, formats, draw, like=like, shape=shape, palette=palette, black=black, order=order
     )
     if like is not None or size is not None:
-        warn_beyond(pixels, shape, options)
+        warn_beyond(pixels, shape, options, "drawn wrapped onto it")
     return files
-
-
-def warn_beyond(pixels, shape, options):
-    """A warning for points outside the ``shape = (H, W)`` canvas of ``--like`` or ``--size`` (they are drawn
-    wrapped onto it)."""
-    from ..measures.reports import outside
-
-    if not options["quiet"]:
-        found = outside(pixels, shape)
-        warn_outside(found["points_outside"], len(pixels), found["image_size"], "drawn wrapped onto it")

@@ -12,7 +12,7 @@ from .options import (
     init_input,
     palette_options,
     resolve_input,
-    warn_outside,
+    warn_beyond,
 )
 from .recipes import colour_recipe, run_pipeline, torus_recipe
 
@@ -87,17 +87,13 @@ def torus(ctx, image, **options):
 def init_outside(shape, options):
     """A warning when ``--init``'s points (a CSV in pixels) lie outside the image, as ``stipple render`` gives: a
     start made for another image (5000 points of a 300 x 200 run, 1764 outside a 200 x 200 image) wraps around."""
-    import numpy as np
-
     from ..pipelines.inputs import INITS, read_points
 
     if options["quiet"] or options["init"] in INITS:
         return
     domain, pixels = read_points(options["init"])
     if domain == "torus":  # otherwise refused with the run's own reading
-        rows, columns = shape
-        outside = int(np.count_nonzero(np.any((pixels < 0) | (pixels >= [columns, rows]), axis=1)))
-        warn_outside(outside, len(pixels), (columns, rows), "the start wraps them around")
+        warn_beyond(pixels, shape, options, "the start wraps them around")
 
 
 def report_count(count, options):
