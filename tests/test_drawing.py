@@ -378,3 +378,10 @@ def test_a_pen_too_wide_for_the_page_is_refused():
         flat_dots([("dots", "black", centres)], (40.0, 30.0), tone_radius=0.2, pen=12.6, dot_style="point")
     (dots,) = flat_dots([("dots", "black", centres)], (40.0, 30.0), tone_radius=0.2, pen=12.4, dot_style="point")
     assert len(dots.centres) >= 1  # just under the limit: drawn (the two dots are thinned to one for that pen)
+
+
+def test_a_pen_too_wide_for_the_map_is_refused_as_on_a_flat_page():
+    """The map's inset stops at a quarter of its height as a flat page's does; a 45 mm pen on a 100 mm map inked
+    past its edges without a word (the flat page's refusal had no twin here)."""
+    with pytest.raises(StippleError, match="the pen is too wide for the page"):
+        pen_sphere_drawing(30, "equirect", "point", 45.0)

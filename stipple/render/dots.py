@@ -70,11 +70,19 @@ def capped_radii(distances, tone_radius, fraction=TOUCH_FRACTION):
     return np.minimum(float(tone_radius), fraction * np.asarray(distances, dtype=np.float64))
 
 
-def inset(centres, size, margin):
+def inset(centres, size, margin, least=0.0):
     """Positions on a ``size = (width, height)`` canvas mapped affinely onto the canvas shrunk by ``margin`` on
     every side, so that a dot of radius up to ``margin`` stays inside (at most ``MAX_MARGIN`` of the shorter
-    side)."""
+    side: the radii are capped there). ``least``: what every dot inks however small its radius (a pen's smallest
+    dot, ``pen_extent``), refused past that bound, where the inset stops (a 500 mm pen inked far past a 300-unit
+    page)."""
     extent = np.asarray(size, dtype=np.float64)
+    if least > MAX_MARGIN * extent.min():
+        raise StippleError(
+            f"the pen is too wide for the page: its dots ink {least:.4g} units from their centres, more than "
+            f"{MAX_MARGIN:g} of the page's shorter side ({extent.min():.4g}); give a narrower --pen-width or a "
+            "larger --width"
+        )
     margin = min(float(margin), MAX_MARGIN * extent.min())
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
 
@@ -91,16 +99,10 @@ def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, dot_style=N
     if pen is not None and dot_style not in PEN_EXTENTS:
         raise ValueError(f"dot_style must be one of {', '.join(PEN_EXTENTS)} with a pen, not {dot_style!r}")
     least = 0.0 if pen is None else pen_extent(dot_style, pen)
-    if least > MAX_MARGIN * min(size):  # the inset stops there: a 500 mm pen inked far past a 300-unit page
-        raise StippleError(
-            f"the pen is too wide for the page: its dots ink {least:.4g} units from their centres, more than "
-            f"{MAX_MARGIN:g} of the page's shorter side ({min(size):.4g}); give a narrower --pen-width or a larger "
-            "--width"
-        )
     margin = max(radius if radius is not None else tone_radius, least)
     placed = []
     for name, colour, centres in layers:
-        moved, margin_used = inset(centres, size, margin)
+        moved, margin_used = inset(centres, size, margin, least)
         placed.append((name, colour, moved))
     if radius is not None:
         return [Dots(name, colour, c, np.full(len(c), float(radius))) for name, colour, c in placed]

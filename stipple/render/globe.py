@@ -78,7 +78,7 @@ def sphere_drawing(
     least = 0.0 if stroke is None else pen_extent(dot_style, stroke)
     if projection == "equirect":
         largest = max(per_radian * angles.max(initial=0), least)
-        centres, margin = inset(equirectangular(longitude, latitude, canvas[0], view[0]), canvas, largest)
+        centres, margin = inset(equirectangular(longitude, latitude, canvas[0], view[0]), canvas, largest, least)
         drawn = Dots("dots", color, centres, np.minimum(angles * per_radian, margin))
         notes = [f"{len(points)} dots, equirectangular (all of them)"]
     else:
