@@ -268,6 +268,19 @@ def test_outputs_that_fail_to_open_leave_no_temporary(tmp_path, monkeypatch):
     assert not list(tmp_path.iterdir())
 
 
+def test_an_mp4_whose_stream_failed_to_open_closes(tmp_path):
+    """The container was open but its stream was not: close() then raised AttributeError (on None.encode) over the
+    first error (a hostile --fps nan, now refused where it enters)."""
+    pytest.importorskip("av")
+    from stipple.io.mp4 import Mp4Stream
+
+    movie = Mp4Stream(str(tmp_path / "o.mp4.tmp"), str(tmp_path / "o.mp4"), float("nan"))
+    with pytest.raises(ValueError):
+        movie.write(Image.new("RGB", (8, 8)))
+    movie.close()
+    assert movie.container is None
+
+
 def test_a_faint_clip_gets_the_torus_note_once_before_its_first_frame(tmp_path):
     """stipple video said none of the notes stipple torus gives on the same frame (a held-out review)."""
     faint = [0.4 + 0.2 * gray for gray in moving_disc(3)]  # gray values spanning a fifth of the range

@@ -8,7 +8,7 @@ import click
 from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
-from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
+from .options import FiniteFloatRange, check_extension, check_longitude, click_error, parse_levels, warn_outside
 from .supervise import guarded_files
 
 
@@ -28,14 +28,14 @@ from .supervise import guarded_files
     show_default=True,
     help="Layered CSVs (x,y,layer or x,y,color): the run's --palette, to separate INPUT into its inks.",
 )
-@click.option("--black", type=click.FloatRange(0, 1), default=1.0, show_default=True, help="As for the run (cmyk).")
+@click.option("--black", type=FiniteFloatRange(0, 1), default=1.0, show_default=True, help="As for the run (cmyk).")
 @click.option("--json", "json_path", default=None, help="Also write the numbers as JSON ('-' for stdout).")
 @click.option("--spectrum", "spectrum_path", default=None, help="Torus: PNG plot of the power spectrum.")
 @click.option("--line", "as_line", is_flag=True, help="POINTS are the vertices of one closed line (stipple line).")
 @click.option(
     "--sigma",
     "sigmas",
-    type=click.FloatRange(min=0, min_open=True),
+    type=FiniteFloatRange(min=0, min_open=True),
     multiple=True,
     help="Pictures: blur in input pixels, repeatable (default 2 and 4).",
 )

@@ -16,6 +16,16 @@ def click_error(error):
     return (click.UsageError if isinstance(error, MissingInput) else click.ClickException)(str(error))
 
 
+class FiniteFloatRange(click.FloatRange):
+    """``click.FloatRange`` that also refuses nan and the infinities (its range check lets nan through)."""
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number.", param, ctx)
+        return number
+
+
 def resolve_input(ctx, given):
     """The IMAGE/MAP argument, or ``input`` from the config file."""
     return given if given is not None else (ctx.default_map or {}).get("input")
@@ -57,7 +67,12 @@ def run_options(iterations=2000, iterations_help="Maximum total number of CG ite
             show_default=True,
             help=iterations_help,
         ),
-        click.option("--time-limit", type=float, default=None, help="Stop after this many seconds."),
+        click.option(
+            "--time-limit",
+            type=FiniteFloatRange(min=0, min_open=True),
+            default=None,
+            help="Stop after this many seconds.",
+        ),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
         click.option(
             "--threads",
@@ -205,7 +220,7 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
         problem.append(
             click.option(
                 "--settle",
-                type=click.FloatRange(min=0),
+                type=FiniteFloatRange(min=0),
                 default=None,
                 help=f"Also stop when the last {SETTLE_WINDOW} iterations lowered the energy by less than this "
                 f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus and for sphere maps, else "
@@ -279,7 +294,7 @@ def palette_options(default):
             ),
             click.option(
                 "--black",
-                type=click.FloatRange(0, 1),
+                type=FiniteFloatRange(0, 1),
                 default=1.0,
                 show_default=True,
                 help="Fraction of the grey component min(c, m, y) printed in black (cmyk).",

@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import look_options, parse_levels, parse_view, render_settings, warn_beyond
+from .options import FiniteFloatRange, look_options, parse_levels, parse_view, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
 
 
@@ -56,7 +56,7 @@ from .supervise import guarded_files, plot_order, write_outputs
 )
 @click.option(
     "--black",
-    type=click.FloatRange(0, 1),
+    type=FiniteFloatRange(0, 1),
     default=None,
     help="Layered points with --like: the run's --black (cmyk; default 1).",
 )

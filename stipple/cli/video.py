@@ -10,6 +10,7 @@ from ..errors import StippleError
 from . import supervise
 from .defaults import FRAME_ITERATIONS
 from .options import (
+    FiniteFloatRange,
     backend_option,
     common_options,
     init_input,
@@ -57,7 +58,7 @@ MIN_FPS = 0.01
 )
 @click.option(
     "--fps",
-    type=click.FloatRange(min=MIN_FPS, max=1000),
+    type=FiniteFloatRange(min=MIN_FPS, max=1000),
     default=None,
     help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images, over --step: the same duration).",
 )

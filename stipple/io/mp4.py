@@ -61,7 +61,9 @@ class Mp4Stream:
         container, self.container = self.container, None
         try:
             try:
-                container.mux(self.stream.encode(None))
+                # No stream where opening failed after the container (then there is nothing to flush).
+                if self.stream is not None:
+                    container.mux(self.stream.encode(None))
             finally:
                 container.close()
         except (self.av.FFmpegError, OSError) as error:
