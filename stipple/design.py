@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import StippleError
 from .halftone import MAX_BANDWIDTH, check_integer, run
-from .sphere import sphere_problem, unit_vectors
+from .sphere import STALLED, sphere_problem, unit_vectors
 
 DESIGN_KERNEL = "sobolev:1"
 DESIGN_EPSILON = 1e-12
@@ -32,7 +32,7 @@ TARGET_ERROR = 1e-10
 GRADIENT_FLOOR = 1e-14
 # ... and a run whose energy stops falling (less than this fraction of it over ``SETTLE_WINDOW`` iterations) has
 # stalled: t = 3 with 5 points sat at a relative gradient of 1.4e-14, above the floor, for all 20000 iterations.
-DESIGN_SETTLE = 1e-12
+DESIGN_SETTLE = STALLED
 # Start on the jittered Fibonacci lattice from this many points per harmonic on; i.i.d. uniform below.
 LATTICE_FROM = 0.65
 LATTICE_JITTER = 0.1
