@@ -189,6 +189,19 @@ def test_the_equirect_picture_lies_over_its_map_and_follows_view(tmp_path):
     assert centred[2] > 2 * max(centred[0], centred[1], centred[3]), centred
 
 
+def test_uniform_points_are_mapped_around_lon_0_as_design_and_render_map_theirs(tmp_path):
+    """Without a map file there is no layout to follow: --uniform's equirect map was centred on 180°."""
+    csv, png = tmp_path / "u.csv", tmp_path / "u.png"
+    arguments = ["--projection", "equirect", "--png-width", 720, "--dot-radius", "2px", "-q", "-o", csv, "-o", png]
+    assert run(["sphere", "--uniform", "-M", 20, *arguments]).exit_code == 0
+    lon, lat = np.loadtxt(csv, delimiter=",", skiprows=1).T
+    gray = np.asarray(Image.open(png).convert("L"), dtype=float)
+    rows, columns = gray.shape
+    x = np.minimum(((lon + 180) % 360) / 360 * columns, columns - 1).astype(int)  # lon 0 in the middle
+    y = np.minimum((90 - lat) / 180 * rows, rows - 1).astype(int)
+    assert np.mean(gray[y, x] < 128) >= 0.75
+
+
 def test_the_command_solves_with_single_precision_derivatives(map_path, tmp_path):
     """``stipple sphere`` asks for ``DERIVATIVE_EPSILON`` (the library's default is ``epsilon``): its points are
     the library's run with it, not without."""

@@ -58,7 +58,8 @@ from .supervise import finish, guarded_files, plot_order, solve, write_outputs
     "--view",
     default=None,
     help="Centre LON,LAT of the globe view in degrees (default 0,0); with --projection equirect the map's centre "
-    "longitude (default: the input map's own layout, its first column at the left edge).",
+    "longitude (default: the input map's own layout, its first column at the left edge; 0 for --uniform and "
+    "builtin maps).",
 )
 @click.pass_context
 def sphere(ctx, map_source, **options):
@@ -77,7 +78,8 @@ def sphere(ctx, map_source, **options):
     try:
         settings = render_settings(options)
         lon0 = check_longitude("lon0", options["lon0"])
-        view = parse_view(options["view"] or default_view(options["projection"], lon0), options["projection"])
+        layout = None if options["uniform"] or str(map_source).startswith("builtin:") else lon0
+        view = parse_view(options["view"] or default_view(options["projection"], layout), options["projection"])
         formats = [output_format(path) for path in options["outputs"]]
         check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
         inputs = [("map", map_source), init_input(options["init"])]
@@ -145,5 +147,7 @@ def warn_aspect(density, source, options):
 
 def default_view(projection, lon0):
     """The view without ``--view``: the globe faces 0,0; the equirectangular map has the input map's layout (its
-    first column, at longitude ``lon0``, at the left edge), so that the picture lies over the map."""
-    return f"{lon0 + 180:g},0" if projection == "equirect" else "0,0"
+    first column, at longitude ``lon0``, at the left edge), so that the picture lies over the map. Without a map
+    file (``lon0`` None: --uniform, a builtin map) the map is centred on 0° as ``stipple design`` and ``stipple
+    render`` centre theirs."""
+    return f"{lon0 + 180:g},0" if projection == "equirect" and lon0 is not None else "0,0"
