@@ -31,7 +31,9 @@ NEAR_WHITE = 0.02
 # The largest inset from a flat page's edges, over its shorter side (``inset``); a pen whose smallest dots need
 # more is refused (``flat_dots``).
 MAX_MARGIN = 0.25
-# How far the smallest pen dot of each style inks from its centre, in pens (``pen_extent``).
+# How far the smallest pen dot of each style inks from its centre on its widest side, in pens (``pen_extent``): a
+# "point" is a stroke a tenth of the pen long, half the pen around it (0.6 of the pen on the stroke's side); the
+# smallest "circle" a ring of radius pen / 20 (0.55); the smallest "filled" dot the point's stroke (0.6).
 PEN_EXTENTS = {"point": 0.6, "circle": 0.55, "filled": 0.6}
 
 
@@ -127,19 +129,16 @@ def left_out_note(left_out, of, where=""):
 
 
 def least_pen_reach(dot_style, pen):
-    """How far the smallest pen dot of ``dot_style`` inks from its centre, for a pen ``pen`` wide (the paths of
-    ``stipple.render.pen.dot_paths``): a "point" is a stroke a tenth of the pen long, half the pen around it (0.6
-    of the pen on the stroke's side; half the pen is taken, as two points the no-touch distance ``pen / 2 / 0.45``
-    apart still leave a hundredth of the pen between them however their strokes turn); the smallest "circle" is
-    a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot is the point's stroke (0.6)."""
-    return {"point": 0.5, "circle": 0.55, "filled": 0.6}[dot_style] * pen
+    """How far the smallest pen dot of ``dot_style`` reaches towards a neighbour, for a pen ``pen`` wide: its
+    ``pen_extent``, but half the pen for a "point", whose short stroke turns any way (two points the no-touch
+    distance ``pen / 2 / TOUCH_FRACTION`` apart still leave a hundredth of the pen between them)."""
+    return 0.5 * pen if dot_style == "point" else pen_extent(dot_style, pen)
 
 
 def pen_extent(dot_style, pen):
-    """How far the smallest pen dot of ``dot_style`` inks from its centre, on its widest side (the margin it needs
-    at the page's edge): a "point" is a stroke a tenth of the pen long from its centre, half the pen around it
-    (0.6 of the pen); the smallest "circle" a ring of radius ``pen / 20`` (0.55); the smallest "filled" dot the
-    point's stroke (0.6). Until 2026-11-27 the margin was half the pen, and such dots crossed the page's edge."""
+    """How far the smallest pen dot of ``dot_style`` inks from its centre on its widest side (``PEN_EXTENTS``):
+    the margin it needs at the page's edge. Until 2026-11-27 the margin was half the pen, and such dots crossed
+    the page's edge."""
     return PEN_EXTENTS[dot_style] * pen
 
 
