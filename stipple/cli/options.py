@@ -71,7 +71,7 @@ def run_options(iterations=2000, iterations_help="Maximum total number of CG ite
             "--time-limit",
             type=FiniteFloatRange(min=0, min_open=True),
             default=None,
-            help="Stop after this many seconds.",
+            help="Stop optimising after this many seconds (reading the input, the set-up and the outputs come on top).",
         ),
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
         click.option(
