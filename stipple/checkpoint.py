@@ -191,6 +191,10 @@ def _check_matches(path, metadata, problem):
         what = SETTING_NAMES.get(differ[0], differ[0])
         if {"points", "shape"} & set(differ):
             what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
+        elif "metric" in differ and saved.get("domain") == "torus":
+            # Only --order progressive solves an image in the flat metric, at a bandwidth of its own: name the
+            # option, not the bandwidth it changed.
+            what = "--order progressive"
         details = "; ".join(f"{key} was {_short(saved.get(key))}, now {problem.settings[key]!r}" for key in differ[:2])
         raise StippleError(
             f"{path}: checkpoint is for a different run: {what} differs ({details}); "

@@ -148,6 +148,17 @@ def test_progressive_on_the_command_line(tmp_path):
     assert len(csv.read_text().splitlines()) == 201
 
 
+@pytest.mark.parametrize("order", [["--order", "progressive"], []])
+def test_resuming_with_or_without_progressive_names_the_option(tmp_path, order):
+    """The message blamed -N, the bandwidth the option changes (a held-out review)."""
+    checkpoint = tmp_path / "run.npz"
+    arguments = ["torus", str(gray(tmp_path)), "-M", "200", "--iterations", "10", "-q", "--checkpoint", str(checkpoint)]
+    assert CliRunner().invoke(main, [*arguments, *order, "-o", str(tmp_path / "a.csv")]).exit_code == 0
+    other = [] if order else ["--order", "progressive"]
+    result = CliRunner().invoke(main, [*arguments, *other, "--resume", "-o", str(tmp_path / "b.csv")])
+    assert result.exit_code == 1 and "different run: --order progressive differs" in result.output, result.output
+
+
 def test_bare_order_is_one_path(tmp_path):
     result = CliRunner().invoke(
         main, ["torus", str(gray(tmp_path)), "-M", "100", "--iterations", "5", "--order", "-o", str(tmp_path / "d.csv")]
