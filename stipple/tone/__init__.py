@@ -18,7 +18,7 @@ dots themselves would be biased: a dot always covers the place where it sits.)
    they would apart up to ``x`` near 0.7, and the paper is black, to 0.2 %, at ``x = 1.4``, a radius of 0.62
    times the hexagonal spacing). So ``pi r^2 = f^-1(t) A``.
 3. ``passes`` corrections against the drawing itself: the union of the discs is drawn (``union_coverage_image``
-   at ``ANALYSIS_SUPERSAMPLE`` fine pixels a grid pixel), each cell's covered fraction ``c`` measured, and each
+   at ``analysis_supersample`` fine pixels a grid pixel), each cell's covered fraction ``c`` measured, and each
    radius multiplied by ``(f^-1(t) / f^-1(c))^(0.7 / 2)``, bounded to ``[1/2, 2]``: a damped Newton step in
    the model, monotone in the error (undamped, cells oscillate where discs begin to touch).
 4. Radii stay within ``[min_radius, max_radius]`` and at most ``max_ratio`` times the distance to the nearest

@@ -13,7 +13,13 @@ from .wrap import Canvas
 
 SATURATION = 9.55
 FULL = 0.999
-ANALYSIS_SUPERSAMPLE = 2
+# Fine pixels per analysis-grid pixel along each axis where the grid leaves room (``analysis_supersample``). A
+# light tone's dot is about one grid pixel across: at 2 its drawn area was off by a fine pixel or two, and the
+# corrections fitted that noise (a flat 0.97 page: radii 10 % apart on average, the largest 2.17 x the smallest).
+# At 4, held-out pictures (a flat 0.97 page, the camera, cat, coffee and dark photos, the portrait) came out 10-40 %
+# closer at sigma 4 px (the camera 0.0042 -> 0.0034, the dark photo 0.0029 -> 0.0021); 8 gained 0.0001 more for
+# twice 4's memory again (docs/picture.md).
+ANALYSIS_SUPERSAMPLE = 4
 SAMPLES_PER_DOT = 24
 STEP_BOUNDS = (0.5, 2.0)
 REGULARISATION = 0.003
@@ -347,7 +353,7 @@ class _Ink:
     def draw(self):
         """The union of the discs on the grid, and each cell's covered fraction."""
         self.drawn = union_coverage_image(
-            self.centres, self.radii, self.size, self.grid, supersample=ANALYSIS_SUPERSAMPLE
+            self.centres, self.radii, self.size, self.grid, supersample=analysis_supersample(self.grid)
         )
         self.covered = np.clip(self.mean(self.drawn), 0.0, 1.0)
         return self.drawn
@@ -367,6 +373,14 @@ class _Ink:
     def final(self):
         """The radii, at least ``min_radius`` (the working floor is a little above 0, so that dots can grow)."""
         return np.clip(self.radii, self.min_radius, self.cap)
+
+
+def analysis_supersample(grid):
+    """``ANALYSIS_SUPERSAMPLE``, or fewer where the grid's fine pixels would pass ``4 MAX_GRID_PIXELS`` (the
+    drawing's bound, ``stipple.tone.raster.check_picture``): a million dots' grid, at ``MAX_GRID_PIXELS``,
+    draws at 2, with the memory it had."""
+    rows, columns = grid
+    return max(1, min(ANALYSIS_SUPERSAMPLE, int(np.sqrt(4 * MAX_GRID_PIXELS / (rows * columns)))))
 
 
 def canvas_pixels(centres, size, shape):
