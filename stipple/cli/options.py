@@ -270,7 +270,7 @@ def look_options(function):
             default=None,
             help="tone: each dot sized so that the drawn ink has the input's tone, darks included (dots may "
             "overlap; the default for filled discs). plotter: one tone radius capped so that no two dots touch "
-            "(lighter than 27 % gray at most), drawing inset; the default for the pen dot styles.",
+            "(its darkest about 42 % gray), drawing inset; the default for the pen dot styles.",
         ),
     ]
     for option in reversed(options):
