@@ -105,6 +105,17 @@ def test_a_given_count_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp
     assert (line in result.output) == noted, result.output
 
 
+def test_under_invert_the_note_names_the_light_tones(tmp_path):
+    """With --invert the dots are light on a dark ground: the image's lightest tones are the ones the plotter
+    style cannot reach, and they come out darker (the note said darker tones would be lighter)."""
+    image = flat_gray(tmp_path, 0.1)  # a dark page: under --invert, light dots' ink is its lightness, 0.9
+    arguments = ["torus", str(image), "-M", "200", "--iterations", "3", "--invert", "--style", "plotter"]
+    result = CliRunner().invoke(main, [*arguments, "-o", str(tmp_path / "out.svg")])
+    assert result.exit_code == 0, result.output
+    assert f"tones lighter than {reachable_tone('filled'):.0%} will be darker" in result.output, result.output
+    assert "lightest 1 % is 90% light" in result.output
+
+
 def test_too_few_point_dots_for_the_ink_get_a_note_with_the_count_that_carries_it(tmp_path):
     """A point pen's dot inks a fixed area: -M 200 of a 0.5 mm pen on a 0.4 gray page drew it about a seventh as
     dark, with only the note about the darkest tones (the page has none)."""

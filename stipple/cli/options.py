@@ -429,7 +429,8 @@ def given_count_hint(darkness, options):
         return
     from ..render.pen_count import given_count_notes
 
-    for line in given_count_notes(darkness, options["n_points"], render_settings(options)):
+    notes = given_count_notes(darkness, options["n_points"], render_settings(options), bool(options.get("invert")))
+    for line in notes:
         click.echo(f"stipple: note: {line}", err=True)
 
 

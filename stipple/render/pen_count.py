@@ -201,15 +201,19 @@ def clipped_density(darkness, allowed, cell_areas=None):
     return np.minimum(darkness, low)
 
 
+# The words of the unreachable tones' note: black dots on paper, and light dots on a dark ground (--invert).
+TONE_WORDS = ("darker", "lighter", "darkest", "dark")
+INVERTED_WORDS = ("lighter", "darker", "lightest", "light")
 # A point pen's dots with a given -M that carry less than this share of the image's ink get a note.
 LIGHT_SHARE = 0.8
 
 
-def given_count_notes(darkness, n_points, draw):
+def given_count_notes(darkness, n_points, draw, inverted=False):
     """Lines about a drawing of ``n_points`` dots in a pen or plotter style (``draw``: the render settings): tones
     darker than the no-touch packing reaches come out lighter (as ``-M auto`` says), and a point pen's dots (a
     fixed area each) that carry far less than the image's ink draw a lighter picture (``-M 8000`` of a 0.5 mm pen
-    drew a 2:1 photo's mean darkness 0.61 as 0.08)."""
+    drew a 2:1 photo's mean darkness 0.61 as 0.08). ``inverted``: light dots on a dark ground (``--invert``),
+    whose ``darkness`` is the image's lightness: the lightest tones are the ones that come out darker."""
     style = draw["dot_style"]
     if draw.get("dot_radius") is not None or not (style in PEN_STYLES or draw.get("style") == "plotter"):
         return []
@@ -217,10 +221,11 @@ def given_count_notes(darkness, n_points, draw):
     lines = []
     reachable = reachable_tone(style if style in PEN_STYLES else "filled")
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
+    beyond, drawn, extreme, tone = INVERTED_WORDS if inverted else TONE_WORDS
     if darkest > reachable:
         lines.append(
-            f"tones darker than {reachable:.0%} will be lighter: the plotter style's dots never touch (the image's "
-            f"darkest 1 % is {darkest:.0%} dark; the default tone style with discs draws them)"
+            f"tones {beyond} than {reachable:.0%} will be {drawn}: the plotter style's dots never touch (the "
+            f"image's {extreme} 1 % is {darkest:.0%} {tone}; the default tone style with discs draws them)"
         )
     if style == "point":
         paper_width, pen_width = paper_and_pen(draw)
@@ -231,7 +236,7 @@ def given_count_notes(darkness, n_points, draw):
         if n_points < LIGHT_SHARE * carried:
             lines.append(
                 f"{n_points} point dots of a {pen_width:g} mm pen ink {n_points * area / paper:.0%} of the paper for "
-                f"the image's {darkness.mean():.0%}: the drawing comes out lighter (-M auto counts the dots that "
+                f"the image's {darkness.mean():.0%}: the drawing comes out {drawn} (-M auto counts the dots that "
                 f"carry its ink, {carried})"
             )
         if n_points > packing:
