@@ -83,8 +83,8 @@ def test_truncated_npy(files):
     [
         (np.full((4, 4), np.nan), "NaN or infinite"),
         (np.array([[1.0, np.inf], [0.0, 1.0]]), "NaN or infinite"),
-        (np.ones((3, 4, 5)), "expected a 2-D map"),
-        (np.ones(7), "expected a 2-D map"),
+        (np.ones((3, 4, 5)), "expected a 2-D image or map"),
+        (np.ones(7), "expected a 2-D image or map"),
         (np.ones((1, 1)), "at least 2×2"),
         (np.full((5, 5), 3.0), "map is constant (3); nothing to rescale (give --range LO HI"),
         (np.zeros((5, 5)), "map is constant"),

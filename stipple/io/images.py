@@ -133,9 +133,10 @@ def _npy_header(data, name):
 def check_grid(values, name="input"):
     """Raise unless ``values`` is a finite 2-D grid of at least 2×2 cells."""
     if values.ndim != 2:
-        raise StippleError(f"{name}: expected a 2-D map, got shape {values.shape}")
+        raise StippleError(f"{name}: expected a 2-D image or map, got shape {values.shape}")
     if min(values.shape) < 2:
-        raise StippleError(f"{name}: map must be at least 2×2 cells, got {values.shape[0]}×{values.shape[1]}")
+        rows, columns = values.shape
+        raise StippleError(f"{name}: must be at least 2×2 pixels (or map cells), got {columns}×{rows}")
     if not np.all(np.isfinite(values)):
         raise StippleError(f"{name}: map contains NaN or infinite values")
     return values
