@@ -334,3 +334,15 @@ def test_the_local_spacing_of_a_vanishing_density_is_infinite_without_a_warning(
         warnings.simplefilter("error")
         spacing = local_spacing(np.array([1e-320, 0.0, 2 / np.sqrt(3)]))
     assert np.isinf(spacing[:2]).all() and spacing[2] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    "picture, options, noted",
+    [("p.png", [], True), ("p.png", ["--gray"], False), ("p.png", ["--colour"], False), ("cp.png", [], False)],
+)
+def test_a_gray_picture_of_a_colour_input_gets_a_note(made, picture, options, noted):
+    """Measured in colour by default, a gray stipple's CIEDE2000 counts the whole missing colour (21.9 for a held-out
+    photo whose luminance was 2-3 times closer than Floyd-Steinberg's), without a word."""
+    result = CliRunner().invoke(main, ["evaluate", str(made / picture), str(made / "c.png"), *options])
+    assert result.exit_code == 0, result.output
+    assert ("is gray and its input in colour" in result.output) == noted, result.output
