@@ -219,6 +219,30 @@ def test_the_dark_image_note_offers_invert_only_where_it_has_light_parts(tmp_pat
         assert inverted.exit_code == 0, inverted.output
 
 
+def test_a_dark_photo_gets_the_dark_note_not_the_faint_one(tmp_path):
+    """A dark photo (gray values spanning a third of the range) got both notes; following the faint one stretched
+    it lighter all over and sent its few highlights to white (a held-out review)."""
+    rng = np.random.default_rng(0)
+    pixels = (255 * np.clip(rng.normal(0.1, 0.05, (32, 48)), 0, 0.35)).astype(np.uint8)
+    Image.fromarray(pixels).save(tmp_path / "dark.png")
+    result = run(["torus", tmp_path / "dark.png", "-M", 60, "-N", 8, "--iterations", 1, "-o", tmp_path / "d.csv"])
+    assert result.exit_code == 0, result.output
+    assert "dark on average" in result.output and "gray values span only" not in result.output
+
+
+@pytest.mark.parametrize("spot, options, noted", [(True, [], True), (True, ["-q"], False), (False, [], False)])
+def test_a_small_dark_spot_on_a_light_page_says_why_the_run_is_long(tmp_path, spot, options, noted):
+    """The spot's dots, packed far closer, raise the bandwidth (to 4456 for 10000 dots on a 600 x 400 page: 62 s
+    and 2.2 GB) without a word."""
+    rows, columns = np.mgrid[0:60, 0:90]
+    darkness = np.exp(-((rows - 30.0) ** 2 + (columns - 45.0) ** 2) / 2.0) if spot else columns / 90
+    Image.fromarray((255 * (1 - darkness)).astype(np.uint8)).save(tmp_path / "page.png")
+    arguments = ["torus", tmp_path / "page.png", "-M", 300, "--iterations", 1, "--no-correct", *options]
+    result = run([*arguments, "-o", tmp_path / "d.csv"])
+    assert result.exit_code == 0, result.output
+    assert ("the bandwidth rises from" in result.output) == noted, result.output
+
+
 def test_checkpoint_every_without_a_checkpoint_is_refused(image_path, tmp_path):
     args = ["torus", image_path, "-M", 20, "-N", 8, "--iterations", 2, "-q", "-o", tmp_path / "d.csv"]
     result = run([*args, "--checkpoint-every", 5])

@@ -76,7 +76,11 @@ def torus(ctx, image, **options):
         recipe = torus_recipe(options)
         inputs = [("image", image), init_input(options["init"])]
         hints = {
-            "inspect": lambda weights: (tone_hints(weights, options), init_outside(weights.shape, options)),
+            "inspect": lambda weights: (
+                tone_hints(weights, options),
+                peak_hint(weights, options),
+                init_outside(weights.shape, options),
+            ),
             "chosen": lambda count: report_count(count, options),
         }
         run_pipeline(stipple_image, image, recipe, options, inputs, started, **hints)
@@ -106,6 +110,33 @@ def report_count(count, options):
         click.echo(f"stipple: {line}", err=True)
 
 
+# A note when the image's peak raises the bandwidth this many times over an even image's with the same dots.
+PEAK_NOTE = 2.0
+
+
+def peak_hint(weights, options):
+    """A note when a dark peak raises the default bandwidth (``stipple.torus.default_bandwidth``) to resolve its
+    dots: a small dark spot on a white 600 x 400 page took 62 s and 2.2 GB for 10000 dots, against seconds for a
+    photo, without a word (a held-out review)."""
+    if options["quiet"] or options["bandwidth"] is not None or not isinstance(options["n_points"], int):
+        return
+    import numpy as np
+
+    from ..torus import default_bandwidth
+
+    even, peaked = (
+        default_bandwidth(options["n_points"], np.ones(weights.shape)),
+        default_bandwidth(options["n_points"], weights),
+    )
+    if peaked >= PEAK_NOTE * even:
+        click.echo(
+            f"stipple: note: the image's darkest part packs its dots far closer than the rest (a small dark mark on "
+            f"a light page): the bandwidth rises from {even} to {peaked} to resolve them, and the run takes longer "
+            "and more memory than an even image's (docs/defaults.md, N at a peak)",
+            err=True,
+        )
+
+
 # Hints on stderr, never a silent change: a faint document (its gray values span less than this) and a mostly
 # dark image (mean darkness above this) are drawn as they are, with the option that would help named.
 FAINT_SPAN, DARK_MEAN = 0.6, 0.75
@@ -126,14 +157,16 @@ def tone_hints(weights, options):
 
     low, high = np.percentile(weights, [0.5, 99.5])
     # A page of one gray with small marks (the same value at both percentiles) has nothing for --levels auto; a
-    # spot on a plain page (the levels are the extremes there) is no faint image.
-    if low < high and high - low < FAINT_SPAN and not clips_a_feature(weights, low, high):
+    # spot on a plain page (the levels are the extremes there) is no faint image; a dark photo gets the hint
+    # below instead (stretched, its few highlights went white and the rest lighter).
+    dark = weights.mean() > DARK_MEAN
+    if not dark and low < high and high - low < FAINT_SPAN and not clips_a_feature(weights, low, high):
         click.echo(
             f"stipple: note: the image's gray values span only {high - low:.0%} of the range; drawn as they are "
             "(--levels auto stretches them to black and white: docs/picture.md)",
             err=True,
         )
-    if weights.mean() > DARK_MEAN:
+    if dark:
         # An image black all over has no light parts for --invert (it is blank under it).
         hint = (
             "--invert draws its light parts as white dots on black: docs/picture.md"
