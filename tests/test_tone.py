@@ -416,3 +416,16 @@ def test_a_flat_light_page_gets_even_dots():
     centres = halftone_torus(darkness, 1500, threads=1, seed=0).points * [160, 120]
     radii = tone_radii(centres, darkness, (160, 120), periodic=True)
     assert radii.std() / radii.mean() < 0.065 and radii.max() / radii.min() < 1.6
+
+
+def test_a_strip_two_pixels_high_keeps_its_tone():
+    """The periodic canvas's margin was at most 0.15 of a side: less than a dot spacing on a strip a few dots high,
+    whose edge dots then had no neighbours across the edges, grew, and drew a 0.5 gray as 0.47."""
+    from stipple.torus import halftone_torus
+
+    darkness = np.full((2, 40), 0.5)
+    centres = halftone_torus(darkness, 100, threads=1, seed=0).points * [40, 2]
+    radii = tone_radii(centres, darkness, (40, 2), periodic=True)
+    copies, origin = stipple.tone.wrap.wrapped_copies(centres, (40, 2), np.array([40.0, 2.0]))
+    drawn = union_coverage_image(copies, radii[origin], (40, 2), (8, 160), supersample=4)
+    assert abs(drawn.mean() - 0.5) < 0.01, drawn.mean()
