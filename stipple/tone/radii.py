@@ -13,12 +13,9 @@ from .wrap import Canvas
 
 SATURATION = 9.55
 FULL = 0.999
-# Fine pixels per analysis-grid pixel along each axis where the grid leaves room (``analysis_supersample``). A
-# light tone's dot is about one grid pixel across: at 2 its drawn area was off by a fine pixel or two, and the
-# corrections fitted that noise (a flat 0.97 page: radii 10 % apart on average, the largest 2.17 x the smallest).
-# At 4, held-out pictures (a flat 0.97 page, the camera, cat, coffee and dark photos, the portrait) came out 10-40 %
-# closer at sigma 4 px (the camera 0.0042 -> 0.0034, the dark photo 0.0029 -> 0.0021); 8 gained 0.0001 more for
-# twice 4's memory again (docs/picture.md).
+# Fine pixels per analysis-grid pixel along each axis where the grid leaves room (``analysis_supersample``): at 2
+# a light tone's dot, a grid pixel across, was drawn a fine pixel or two off and the corrections fitted that noise
+# (a flat 0.97 page's radii 10 % apart); 4 drew held-out photos 10-40 % closer at sigma 4 px (docs/picture.md).
 ANALYSIS_SUPERSAMPLE = 4
 SAMPLES_PER_DOT = 24
 STEP_BOUNDS = (0.5, 2.0)
@@ -376,9 +373,8 @@ class _Ink:
 
 
 def analysis_supersample(grid):
-    """``ANALYSIS_SUPERSAMPLE``, or fewer where the grid's fine pixels would pass ``4 MAX_GRID_PIXELS`` (the
-    drawing's bound, ``stipple.tone.raster.check_picture``): a million dots' grid, at ``MAX_GRID_PIXELS``,
-    draws at 2, with the memory it had."""
+    """``ANALYSIS_SUPERSAMPLE``, or fewer where the fine pixels would pass the drawing's bound (``check_picture``):
+    a million dots' grid, at ``MAX_GRID_PIXELS``, draws at 2."""
     rows, columns = grid
     return max(1, min(ANALYSIS_SUPERSAMPLE, int(np.sqrt(4 * MAX_GRID_PIXELS / (rows * columns)))))
 
