@@ -17,7 +17,7 @@ from importlib.metadata import PackageNotFoundError, version
 import numpy as np
 
 from .errors import StippleError
-from .io.archive import MemberReader
+from .io.archive import MemberReader, open_archive
 from .io.commit import atomic_write
 from .optimize import CGState
 
@@ -75,7 +75,7 @@ def load_checkpoint(path, problem):
     problem needs, and every member's dtype, shape and range is validated.
     """
     try:
-        with zipfile.ZipFile(path) as archive:
+        with open_archive(path) as archive:
             return _read_checkpoint(path, archive, problem)
     except FileNotFoundError:
         raise StippleError(f"{path}: no checkpoint to resume") from None
@@ -250,7 +250,7 @@ def saved_settings(path):
     """The ``settings`` a checkpoint was saved with (to rebuild the problem it was written for), or ``{}`` where
     the file cannot be read as a checkpoint (``load_checkpoint`` then says why)."""
     try:
-        with zipfile.ZipFile(path) as archive:
+        with open_archive(path) as archive:
             return _metadata(path, _MemberReader(path, archive).text("metadata", MAX_METADATA_BYTES))["settings"]
     except (StippleError, OSError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError):
         return {}

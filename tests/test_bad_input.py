@@ -311,3 +311,22 @@ def test_resume_refuses_another_kernel_or_domain(files):
     )
     text = invoke(["torus", files[1], "-M", 30, "-N", 4, "-q", "-o", files[2], "--checkpoint", path, "--resume"])
     assert "domain was 'sphere', now 'torus'" in text
+
+
+@pytest.mark.parametrize("command", ["torus", "video"])
+def test_a_checkpoint_that_is_not_a_regular_file_is_refused(files, tmp_path, command):
+    """A zip reader read /dev/zero to its end (17.6 GB in 40 s, then killed) and waited on a FIFO for ever."""
+    import os
+    import subprocess
+    import sys
+
+    fifo = tmp_path / "run.npz"
+    os.mkfifo(fifo)
+    _, image, output = files
+    source = image if command == "torus" else files[0]
+    args = [command, source, "-M", 30, "-N", 8, "--iterations", 2, "-q", "-o", output, "--checkpoint", fifo]
+    done = subprocess.run(
+        [sys.executable, "-m", "stipple", *map(str, args), "--resume"], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 1 and "not a regular file" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and output.read_text() == KEEP

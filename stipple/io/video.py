@@ -17,7 +17,7 @@ import numpy as np
 from PIL import Image
 
 from ..errors import StippleError
-from .archive import MemberReader
+from .archive import MemberReader, open_archive
 from .commit import StagedOutputs, atomic_write, write_stdout
 from .images import auto_levels, image_colour, image_density, load_colour, load_density
 from .mp4 import Mp4Stream, error_reason, require_av
@@ -365,7 +365,7 @@ def load_video_checkpoint(path, settings):
     """``(points, indices, fingerprints)`` of a video checkpoint for a run with ``settings``; refuses files that are
     damaged, foreign, or for other settings. Nothing is unpickled and every member's size is checked first."""
     try:
-        with zipfile.ZipFile(path) as archive:
+        with open_archive(path) as archive:
             reader = MemberReader(path, archive, "not a video checkpoint", "damaged video checkpoint")
             metadata = _checkpoint_metadata(path, reader.value("metadata", MAX_METADATA_BYTES, "U"))
             for key, value in settings.items():
