@@ -248,8 +248,7 @@ def torus_problem(
         correction_bandwidth = default_bandwidth(n_points, weights)
         bandwidth = even_at_least_2(correction_bandwidth * check_bandwidth_factor(bandwidth_factor))
     bandwidth = check_bandwidth(bandwidth)
-    # About a dozen complex mode grids (oversampled) and forty real values per point live at once.
-    check_memory(12 * 16 * 1.6 * (bandwidth + 1) ** 2 + 40 * 8 * n_points, f"M={n_points}, N={bandwidth}")
+    check_memory(GRIDS * 16 * 1.6 * (bandwidth + 1) ** 2 + POINT_BYTES * n_points, f"M={n_points}, N={bandwidth}")
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
     threads = default_threads() if threads is None else check_threads(threads)
@@ -299,6 +298,14 @@ def torus_problem(
             "metric": "density" if precondition else "flat",
         },
     )
+
+
+# A run's memory (``torus_problem``'s check): GRIDS complex mode grids, oversampled, and POINT_BYTES a point. Whole
+# default commands peaked at 2.50 GiB for 10^6 points at N = 2620 (estimated 2.40), 2.19 GB for a small dark spot
+# on a white page, 10^4 points at N = 3120 (2.25). Twelve grids and 320 bytes a point estimated 20 million points on
+# a 48 x 32 image at 15.4 GiB, which passed on a machine with 22.8 GiB available, and the kernel's OOM killer ended
+# the run at 23.5 GB; now 25.7 GiB, refused.
+GRIDS, POINT_BYTES = 9, 1000
 
 
 def pair_share(threads):

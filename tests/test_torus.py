@@ -218,3 +218,24 @@ def test_single_precision_derivatives_keep_the_energy_and_steer_alike(rng):
     assert derivative_accuracy(1e-3, 1e-4) == 1e-3
     with pytest.raises(StippleError, match="epsilon"):
         torus_problem(weights, 3000, derivative_epsilon=float("nan"))
+
+
+class _PastTheMemoryCheck(Exception):
+    pass
+
+
+@pytest.mark.parametrize("shape, count, refused", [((32, 48), 20_000_000, True), ((1024, 1024), 1_000_000, False)])
+def test_the_memory_check_counts_what_a_point_costs(monkeypatch, shape, count, refused):
+    """20 million points on a 48 x 32 image were estimated at 15.4 GiB (320 bytes a point), passed on a machine
+    with 22.8 GiB available, and were killed by the kernel at 23.5 GB; the default million-dot run, which peaks at
+    2.50 GiB, still passes with 2.6 GiB available."""
+    import stipple.allocator
+    import stipple.torus
+
+    def past(*args):
+        raise _PastTheMemoryCheck
+
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: (22.8 if refused else 2.6) * 2**30)
+    monkeypatch.setattr(stipple.torus, "make_nufft", past)
+    with pytest.raises(StippleError if refused else _PastTheMemoryCheck):
+        torus_problem(np.full(shape, 0.5), count)
