@@ -90,6 +90,35 @@ def test_an_old_file_that_cannot_be_put_back_is_named_and_kept(tmp_path, monkeyp
     assert len(kept) == 1 and kept[0].read_text() == "old a\n" and (tmp_path / "b.svg").read_text() == "old b\n"
 
 
+def test_a_new_output_whose_rename_fails_is_reported_in_one_line(tmp_path, monkeypatch):
+    """A new output (no old file) whose name could not be removed in the rollback (too long) put None among the
+    old files to name: a TypeError traceback after the whole run (a hostile review)."""
+    (tmp_path / "a.csv").write_text("old a\n")
+    real = os.replace
+
+    def refusing_the_new_name(source, destination):
+        if str(destination).endswith("new.csv"):
+            raise OSError(errno.ENAMETOOLONG, os.strerror(errno.ENAMETOOLONG))
+        real(source, destination)
+
+    remove = stipple.io.commit._remove
+
+    def unremovable(path):
+        if str(path).endswith("new.csv"):
+            raise OSError(errno.ENAMETOOLONG, os.strerror(errno.ENAMETOOLONG))
+        remove(path)
+
+    monkeypatch.setattr(os, "replace", refusing_the_new_name)
+    monkeypatch.setattr(stipple.io.commit, "_remove", unremovable)
+    with pytest.raises(StippleError, match="new.csv: cannot write .File name too long.$"):
+        stipple.io.commit.commit_outputs([(tmp_path / "a.csv", b"new a\n"), (tmp_path / "new.csv", b"new\n")])
+
+
+def test_a_name_too_long_for_the_folder_is_refused_before_the_run(folder):
+    name = "a" * 300 + ".csv"
+    refused(["torus", "in.png", *FAST, *OUTPUTS, "-o", name], folder, "the file name is 304 bytes")
+
+
 def test_a_folder_made_where_a_staged_output_goes_is_refused_with_nothing_renamed(tmp_path):
     (tmp_path / "a.csv").write_text("old\n")
     with pytest.raises(StippleError, match="b.png: cannot write .it is a folder"), StagedOutputs() as staged:

@@ -40,6 +40,7 @@ def check_writable(path):
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    _check_name_length(path, directory)
     if not os.stat(directory).st_mode & 0o222:  # refused by its mode, as a read-only file is, even for root
         raise StippleError(f"{path}: not writable (the folder {directory} is read-only)")
     if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
@@ -49,6 +50,18 @@ def check_writable(path):
             pass
     except OSError as error:
         raise StippleError(f"{path}: not writable ({error.strerror})") from None
+
+
+def _check_name_length(path, directory):
+    """Raise where the file name of ``path`` is longer than its folder's file system allows (a 300-byte name was
+    refused only by the rename at the end, after the whole run)."""
+    name = os.fsencode(os.path.basename(path))
+    try:
+        longest = os.pathconf(directory, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        longest = 255
+    if len(name) > longest:
+        raise StippleError(f"{str(path)[:40]}...: the file name is {len(name)} bytes, more than the {longest} allowed")
 
 
 def check_folder(directory):
@@ -155,7 +168,8 @@ def _replace_all(pairs):
             replaced.append((path, _keep_previous(path)))
             os.replace(temporary, path)
     except OSError as error:
-        kept = [previous for done, previous in reversed(replaced) if not _put_back(done, previous)]
+        # A new output's name that cannot be removed has no old file to keep (its previous is None).
+        kept = [previous for done, previous in reversed(replaced) if not _put_back(done, previous) and previous]
         also = f"; the old file is kept as {', '.join(kept)}" if kept else ""
         raise StippleError(f"{path}: cannot write ({error.strerror or error}){also}") from None
     for _, previous in replaced:
