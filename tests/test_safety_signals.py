@@ -1,4 +1,4 @@
-"""SIGINT / SIGTERM while outputs are written: exit 130 / 143, one line, no temporary file, nothing half-written."""
+"""SIGINT / SIGTERM / SIGHUP while outputs are written: exit 130 / 143 / 129, one line, no temporary file, nothing half-written."""
 
 import signal
 import subprocess
@@ -46,7 +46,8 @@ def child(folder, hook, numbers, kind, args):
     )
 
 
-@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143)])
+# SIGHUP: a closed terminal or a dropped SSH session (it left eight temporaries and a lock: a hostile review).
+@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143), ("SIGHUP", 129)])
 @pytest.mark.parametrize("number", [1, 3])
 def test_signal_while_temporaries_are_written(folder, kind, code, number):
     before = snapshot(folder)
@@ -58,7 +59,7 @@ def test_signal_while_temporaries_are_written(folder, kind, code, number):
     assert snapshot(folder) == before and leftovers(folder) == []
 
 
-@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143)])
+@pytest.mark.parametrize("kind,code", [("SIGINT", 130), ("SIGTERM", 143), ("SIGHUP", 129)])
 def test_signal_during_the_renames_waits_until_all_are_done(folder, kind, code):
     result = child(folder, "replace", 1, kind, ["torus", "in.png", *FAST, *OUTPUTS])
     assert result.returncode == code, result.stderr

@@ -1,6 +1,6 @@
 """The ``stipple`` command group: every error as one line on stderr, signals unwound cleanly, and the commands.
 
-Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 after SIGINT / SIGTERM
+Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 / 129 after SIGINT / SIGTERM / SIGHUP
 (during the optimisation a first signal writes the checkpoint and the outputs reached so far; any other
 signal removes every temporary file and leaves every output whole or untouched). Every error is one line.
 """
@@ -27,7 +27,7 @@ from .video import video
 class StippleGroup(click.Group):
     """The ``stipple`` group: every error is one line on stderr, and signals unwind cleanly.
 
-    Usage errors exit 2, data and file errors 1, SIGINT / SIGTERM 130 / 143.
+    Usage errors exit 2, data and file errors 1, SIGINT / SIGTERM / SIGHUP 130 / 143 / 129.
     """
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):

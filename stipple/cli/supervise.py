@@ -12,7 +12,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.commit import FORMATS, check_writable, commit_outputs, output_format
+from ..io.commit import FORMATS, STOP_SIGNALS, check_writable, commit_outputs, output_format
 from ..io.safety import CheckpointLock, check_distinct
 
 
@@ -57,11 +57,11 @@ class Interrupted(BaseException):
 
 
 class SignalGuard:
-    """SIGINT / SIGTERM for the whole command.
+    """SIGINT / SIGTERM / SIGHUP (``STOP_SIGNALS``) for the whole command.
 
     While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
     iteration, so that the checkpoint and the outputs reached so far are written; any other signal
-    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143);
+    raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143 / 129);
     signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short.
     """
 
@@ -73,7 +73,7 @@ class SignalGuard:
 
     def __enter__(self):
         self.signal, self.deferring, self.unwinding = None, False, False
-        for number in (signal.SIGINT, signal.SIGTERM):
+        for number in STOP_SIGNALS:
             try:
                 self._previous[number] = signal.signal(number, self._handle)
             except ValueError:  # not the main thread: leave signals alone

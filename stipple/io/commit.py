@@ -261,9 +261,15 @@ def _remove(path):
         pass
 
 
+# The signals that end a command cleanly (temporaries removed, locks released): Ctrl-C, kill, and a closed terminal
+# or dropped SSH session (SIGHUP left eight temporaries and a lock: a hostile review). Not on Windows, which has no
+# SIGHUP.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
 @contextlib.contextmanager
 def _signals_held():
-    """SIGINT and SIGTERM received in the block are delivered after it (main thread only; else a no-op).
+    """``STOP_SIGNALS`` received in the block are delivered after it (main thread only; else a no-op).
 
     The Python-level handlers are swapped for a recorder, which works whichever thread the kernel
     picks for the signal; recorded signals are raised again once the previous handlers are back.
@@ -271,7 +277,7 @@ def _signals_held():
     caught = []
     previous = {}
     try:
-        for number in (signal.SIGINT, signal.SIGTERM):
+        for number in STOP_SIGNALS:
             previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
     except ValueError:  # not the main thread: signals cannot be handled here anyway
         pass
