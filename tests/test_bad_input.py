@@ -330,3 +330,19 @@ def test_a_checkpoint_that_is_not_a_regular_file_is_refused(files, tmp_path, com
     )
     assert done.returncode == 1 and "not a regular file" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr and output.read_text() == KEEP
+
+
+@pytest.mark.parametrize(
+    "extra, code, message",
+    [
+        (["--checkpoint", ""], 1, "--checkpoint: an empty file name"),  # found after the whole run, when written
+        (["-o", ""], 2, "an empty file name"),
+        (["--config", "EMPTY"], 2, "no output: give one or more files"),  # output = [] ran, wrote nothing, exit 0
+    ],
+)
+def test_empty_names_and_no_outputs_are_refused_before_the_run(files, extra, code, message):
+    folder, image, output = files
+    (folder / "empty.toml").write_text("output = []\n")
+    extra = [str(folder / "empty.toml") if part == "EMPTY" else part for part in extra]
+    text = invoke(["torus", image, "-M", 30, "-N", 8, "--iterations", 2, "-q", *extra], expected_code=code)
+    assert message in text and output.read_text() == KEEP

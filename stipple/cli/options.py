@@ -26,6 +26,17 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
+def some_output(ctx, param, outputs):
+    """The ``-o`` files, refused when none is given: a config file's ``output = []`` ran, wrote nothing and
+    exited 0 (without -o the default is '-', stdout)."""
+    if not outputs:
+        raise click.BadParameter("no output: give one or more files, or '-' for stdout", ctx, param)
+    for path in outputs:
+        if not str(path).strip():
+            raise click.BadParameter("an empty file name (an unset shell variable?)", ctx, param)
+    return outputs
+
+
 def resolve_input(ctx, given):
     """The IMAGE/MAP argument, or ``input`` from the config file."""
     return given if given is not None else (ctx.default_map or {}).get("input")
@@ -102,6 +113,7 @@ def output_options():
             multiple=True,
             default=("-",),
             show_default=True,
+            callback=some_output,
             help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
         ),
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),

@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import FiniteFloatRange, look_options, parse_levels, parse_view, render_settings, warn_beyond
+from .options import FiniteFloatRange, look_options, parse_levels, parse_view, render_settings, some_output, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
 
 
@@ -18,6 +18,7 @@ from .supervise import guarded_files, plot_order, write_outputs
     multiple=True,
     default=("-",),
     show_default=True,
+    callback=some_output,
     help="Output (.csv .svg .png .geojson); repeatable; '-' is CSV on stdout.",
 )
 @click.option(

@@ -152,6 +152,8 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=(), formats=FORMATS)
         check_writable(path)
     if list(outputs).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
+    if checkpoint is not None and not str(checkpoint).strip():  # found only when it was written, after the run
+        raise StippleError("--checkpoint: an empty file name (an unset shell variable?)")
     if checkpoint is not None and str(checkpoint) == "-":
         raise StippleError("--checkpoint must name a file, not '-': a checkpoint is saved, replaced and resumed")
     piped = [role for role, path in inputs if path is not None and str(path) == "-"]
