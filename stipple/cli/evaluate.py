@@ -8,8 +8,9 @@ import click
 from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
-from .options import FiniteFloatRange, check_extension, check_longitude, click_error, parse_levels, warn_outside
+from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
 from .supervise import guarded_files
+from .values import FiniteFloatRange
 
 
 @click.command()

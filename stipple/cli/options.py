@@ -8,33 +8,13 @@ from ..errors import MissingInput, StippleError
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
+from .values import FiniteFloatRange, some_output
 
 
 def click_error(error):
     """The click exception that reports a library error in one line: a missing input is bad usage (exit code 2, as
     a missing argument), any other error exit code 1."""
     return (click.UsageError if isinstance(error, MissingInput) else click.ClickException)(str(error))
-
-
-class FiniteFloatRange(click.FloatRange):
-    """``click.FloatRange`` that also refuses nan and the infinities (its range check lets nan through)."""
-
-    def convert(self, value, param, ctx):
-        number = super().convert(value, param, ctx)
-        if not math.isfinite(number):
-            self.fail(f"{value!r} is not a finite number.", param, ctx)
-        return number
-
-
-def some_output(ctx, param, outputs):
-    """The ``-o`` files, refused when none is given: a config file's ``output = []`` ran, wrote nothing and
-    exited 0 (without -o the default is '-', stdout)."""
-    if not outputs:
-        raise click.BadParameter("no output: give one or more files, or '-' for stdout", ctx, param)
-    for path in outputs:
-        if not str(path).strip():
-            raise click.BadParameter("an empty file name (an unset shell variable?)", ctx, param)
-    return outputs
 
 
 def resolve_input(ctx, given):

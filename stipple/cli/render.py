@@ -5,8 +5,9 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import FiniteFloatRange, look_options, parse_levels, parse_view, render_settings, some_output, warn_beyond
+from .options import look_options, parse_levels, parse_view, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
+from .values import FiniteFloatRange, some_output
 
 
 @click.command()

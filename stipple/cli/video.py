@@ -10,7 +10,6 @@ from ..errors import StippleError
 from . import supervise
 from .defaults import FRAME_ITERATIONS
 from .options import (
-    FiniteFloatRange,
     backend_option,
     common_options,
     init_input,
@@ -22,6 +21,7 @@ from .options import (
 )
 from .supervise import SIGNALS, Progress, checkpoint_interval, guarded_files
 from .torus import tone_hints
+from .values import FiniteFloatRange
 
 DEFAULT_FPS = 24.0
 MIN_FPS = 0.01
