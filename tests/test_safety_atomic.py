@@ -228,3 +228,23 @@ def test_stdout_item_is_written_before_files_are_renamed(tmp_path, monkeypatch):
     with pytest.raises(stipple.io.commit.StippleError):
         stipple.io.commit.commit_outputs([(str(tmp_path / "a.csv"), b"new\n"), ("-", b"x")])
     assert (tmp_path / "a.csv").read_text() == "old\n" and leftovers(tmp_path) == []
+
+
+def test_outputs_and_checkpoints_are_written_through_symbolic_links(folder):
+    """Renamed over a link, a resumed checkpoint's link became a file of its own and its file kept the old state,
+    which the next resume through the real name read (a hostile review); outputs through links alike."""
+    (folder / "sub").mkdir()
+    (folder / "sub" / "real.csv").write_text("old\n")
+    os.symlink("sub/real.csv", folder / "link.csv")
+    os.symlink("sub/none.csv", folder / "dangling.csv")  # its file does not exist yet
+    os.symlink("sub/run.npz", folder / "run.npz")
+    args = ["torus", "in.png", *FAST, "-o", "link.csv", "-o", "dangling.csv", "--checkpoint", "run.npz"]
+    assert invoke(args, folder).exit_code == 0
+    for link, real in (("link.csv", "real.csv"), ("dangling.csv", "none.csv"), ("run.npz", "run.npz")):
+        assert (folder / link).is_symlink() and (folder / "sub" / real).is_file()
+    assert (folder / "sub" / "real.csv").read_text().startswith("x,y")
+    written = (folder / "sub" / "run.npz").read_bytes()
+    resumed = ["torus", "in.png", "-M", "30", "-N", "8", "--iterations", "4", "-q", "-o", "link.csv"]
+    assert invoke([*resumed, "--checkpoint", "run.npz", "--resume"], folder).exit_code == 0
+    assert (folder / "run.npz").is_symlink() and (folder / "sub" / "run.npz").read_bytes() != written
+    assert leftovers(folder) == [] and leftovers(folder / "sub") == []

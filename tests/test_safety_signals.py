@@ -1,4 +1,5 @@
-"""SIGINT / SIGTERM / SIGHUP while outputs are written: exit 130 / 143 / 129, one line, no temporary file, nothing half-written."""
+"""SIGINT / SIGTERM / SIGHUP while outputs are written: exit 130 / 143 / 129, one line, no temporary file,
+nothing half-written."""
 
 import signal
 import subprocess

@@ -33,6 +33,7 @@ def check_writable(path):
         if sys.stdout is None:
             raise StippleError("cannot write to stdout: it is closed")
         return
+    path = through_links(path)
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
         if os.path.exists(directory):
@@ -62,6 +63,13 @@ def _check_name_length(path, directory):
         longest = 255
     if len(name) > longest:
         raise StippleError(f"{str(path)[:40]}...: the file name is {len(name)} bytes, more than the {longest} allowed")
+
+
+def through_links(path):
+    """``path``, or the file its symbolic link names (followed to the end, even where that file does not exist
+    yet): outputs and checkpoints are written through a link to its file. Renamed over the link, a resumed
+    checkpoint's link became a file of its own, and its file kept the old state for the next resume."""
+    return os.path.realpath(path) if os.path.islink(path) else path
 
 
 def check_folder(directory):
@@ -121,11 +129,13 @@ class StagedOutputs:
         if str(path) == "-":
             self._stdout.append(data)
         else:
+            path = through_links(path)
             self._temporaries.append((_write_temporary(path, data), path))
 
     def reserve(self, path):
         """An empty temporary file beside ``path`` for the caller to write (a large file streamed as it grows,
         such as a video), renamed over ``path`` at ``commit`` (and fsynced first) or removed with the others."""
+        path = through_links(path)
         temporary = _write_temporary(path, b"")
         self._temporaries.append((temporary, path))
         self._reserved.add(temporary)
