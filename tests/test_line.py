@@ -360,3 +360,24 @@ def test_the_lines_message_counts_every_phases_iterations():
     phases = sum(1 for step in steps if step == 0)
     total, counted = re.match(r"(\d+) iterations in (\d+) phases, the last: ", result.message).groups()
     assert int(counted) == phases > 1 and int(total) == sum(1 for step in steps if step > 0)
+
+
+def test_a_line_resumed_in_a_later_phase_ends_where_the_whole_run_ends(tmp_path):
+    """Resumed in a later phase, the run took the first phase's cap for it (400 instead of 100) and all eight
+    phases again after it, and ended elsewhere than the run it continued (a hostile review)."""
+    weights = np.tile(np.linspace(0.1, 0.9, 48), (32, 1))
+    options = {"iterations": 40, "seed": 1, "threads": 1}
+    whole = draw_line(weights, 300, **options)
+    assert whole.message.count("phases") == 1  # the run has later phases to stop in
+    where = {"phase": 0, "last": -1}
+
+    def stop_in_the_second_phase(state):
+        where["phase"] += state.iteration < where["last"]  # each phase counts its iterations from 0
+        where["last"] = state.iteration
+        return where["phase"] >= 1 and state.iteration >= 3
+
+    checkpoint = tmp_path / "line.npz"
+    stopped = draw_line(weights, 300, callback=stop_in_the_second_phase, checkpoint=checkpoint, **options)
+    assert stopped.state.iteration > 0 and stopped.status == "stopped"
+    resumed = draw_line(weights, 300, checkpoint=checkpoint, resume=True, **options)
+    np.testing.assert_array_equal(resumed.points, whole.points)

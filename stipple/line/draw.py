@@ -1,6 +1,7 @@
 """``draw_line``: the curve optimised in phases, the speed penalty's weight raised until every segment holds."""
 
 import functools
+import math
 import os
 import time
 
@@ -68,9 +69,11 @@ def draw_line(
         ``problem`` and ``penalty`` of the last phase, and ``segment_lengths`` in pixels.
     """
     weights = check_weights(load_density(image) if isinstance(image, (str, os.PathLike)) else image)
-    penalty = initial_penalty
+    penalty, done = initial_penalty, 0
     if resume and checkpoint is not None:
         penalty = float(saved_settings(checkpoint).get("penalty", 1.0))
+        done = phases_before(penalty, initial_penalty)
+    phase_cap = max(1, iterations // 4) if phase_iterations is None else phase_iterations
     build = functools.partial(
         line_problem,
         weights,
@@ -91,7 +94,7 @@ def draw_line(
         problem,
         init=init,
         tol=tol,
-        iterations=iterations,
+        iterations=phase_cap if done else iterations,  # a later phase resumed: its own cap, as it first ran
         time_limit=time_limit,
         callback=callback,
         checkpoint=checkpoint,
@@ -100,12 +103,7 @@ def draw_line(
         resume=resume,
         beta=beta,
     )
-    phase = {
-        "tol": tol,
-        "iterations": max(1, iterations // 4) if phase_iterations is None else phase_iterations,
-        "beta": beta,
-        "callback": callback,
-    }
+    phase = {"tol": tol, "iterations": phase_cap, "beta": beta, "callback": callback, "left": MAX_PHASES - done}
     saving = {"path": checkpoint, "seconds": checkpoint_seconds, "iterations": checkpoint_iterations}
     ends = (started, time_limit)
     counts = [result.iterations]
@@ -119,7 +117,7 @@ def tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends
     CG iterations from the last points, each phase saving its own checkpoint and appending its iterations to
     ``counts``. Returns the last phase's problem, penalty and result."""
     started, time_limit = ends
-    for _ in range(MAX_PHASES):
+    for _ in range(phase["left"]):
         if constraints_hold(problem, result.points, constraint_tol) or result.status == "stopped":
             break
         remaining = None if time_limit is None else time_limit - (time.perf_counter() - started)
@@ -143,6 +141,13 @@ def tighten(build, problem, penalty, result, constraint_tol, phase, saving, ends
             saver.save(result.state)
         counts.append(result.iterations)
     return problem, penalty, result
+
+
+def phases_before(penalty, initial_penalty):
+    """How many phases came before the one of weight ``penalty`` (a checkpoint's): each multiplied the weight by
+    ``PENALTY_GROWTH``. A resumed later phase ran with the first phase's cap and all ``MAX_PHASES`` after it, and
+    ended elsewhere than the run it continued (a hostile review)."""
+    return max(0, round(math.log(penalty / initial_penalty) / math.log(PENALTY_GROWTH)))
 
 
 def finished(result, problem, penalty, started, counts):
