@@ -187,13 +187,18 @@ def _metadata(path, text):
 def _check_matches(path, metadata, problem):
     saved = metadata["settings"]
     differ = [key for key, value in problem.settings.items() if saved.get(key) != value]
+    if "domain" in differ:
+        raise StippleError(
+            f"{path}: checkpoint is of a {COMMANDS.get(saved.get('domain'), 'another')} run, not of this one"
+        )
     if differ:
+        # The option that was changed, before the settings it changes with it (-N follows -M and --length).
+        differ.sort(key=lambda key: FIRST_NAMED.index(key) if key in FIRST_NAMED else len(FIRST_NAMED))
         what = SETTING_NAMES.get(differ[0], differ[0])
-        if {"points", "shape"} & set(differ):
+        if differ[0] in ("points", "shape"):
             what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
-        elif "metric" in differ and saved.get("domain") == "torus":
-            # Only --order progressive solves an image in the flat metric, at a bandwidth of its own: name the
-            # option, not the bandwidth it changed.
+        elif differ[0] == "metric" and saved.get("domain") == "torus":
+            # Only --order progressive solves an image in the flat metric, at a bandwidth of its own.
             what = "--order progressive"
         details = "; ".join(f"{key} was {_short(saved.get(key))}, now {problem.settings[key]!r}" for key in differ[:2])
         raise StippleError(
@@ -206,8 +211,17 @@ def _check_matches(path, metadata, problem):
         )
 
 
-# What a checkpoint's other settings are on the command line.
-SETTING_NAMES = {"bandwidth": "-N (the bandwidth)", "length": "--length (the line's length)"}
+# What a checkpoint's other settings are on the command line, and the order in which a change is named.
+SETTING_NAMES = {
+    "bandwidth": "-N (the bandwidth)",
+    "length": "--length (the line's length)",
+    "classes": "--palette (the inks)",
+    "class_points": "-M or --palette (the inks' dots)",
+    "class_bandwidths": "-N (the inks' bandwidths)",
+    "term_weights": "--black or --union-weight",
+}
+FIRST_NAMED = ["classes", "points", "shape", "metric", "length", "term_weights", "class_points", "class_bandwidths"]
+COMMANDS = {"torus": "stipple torus or colour", "sphere": "stipple sphere or design", "line": "stipple line"}
 
 
 def _short(value, limit=60):

@@ -310,7 +310,8 @@ def test_resume_refuses_another_kernel_or_domain(files):
         base + ["--checkpoint", path, "--resume", "--kernel", "sobolev:1"]
     )
     text = invoke(["torus", files[1], "-M", 30, "-N", 4, "-q", "-o", files[2], "--checkpoint", path, "--resume"])
-    assert "domain was 'sphere', now 'torus'" in text
+    # It said that the map, -M or a design's -t differed: the command differs (a hostile review).
+    assert "checkpoint is of a stipple sphere or design run, not of this one" in text
 
 
 @pytest.mark.parametrize("command", ["torus", "video"])
@@ -346,3 +347,12 @@ def test_empty_names_and_no_outputs_are_refused_before_the_run(files, extra, cod
     extra = [str(folder / "empty.toml") if part == "EMPTY" else part for part in extra]
     text = invoke(["torus", image, "-M", 30, "-N", 8, "--iterations", 2, "-q", *extra], expected_code=code)
     assert message in text and output.read_text() == KEEP
+
+
+def test_resuming_with_another_palette_names_the_palette(files):
+    """A changed --palette on resume was reported as '-N (the bandwidth) differs' (a hostile review)."""
+    path = files[0] / "colour.npz"
+    base = ["torus", files[1], "-M", 60, "-N", 8, "--iterations", 2, "-q", "-o", files[2], "--checkpoint", path]
+    assert CliRunner().invoke(main, [str(a) for a in base + ["--palette", "cmy"]]).exit_code == 0
+    text = invoke(base + ["--resume", "--palette", "cmyk"])
+    assert "--palette (the inks) differs" in text
