@@ -48,8 +48,8 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
 
     Distances are periodic, in pixels (``points`` in unit coordinates, ``weights`` the density on the ``(H, W)``
     pixel grid, as in ``stipple.measures.evaluate.torus_neighbours``). Within a pass all dots move at once, each by at
-    most ``target / 2`` of its spacing; dots in pixels of zero density never move. Returns the new points (unit
-    coordinates, in ``[0, 1)``) and the number of dots moved in the first pass.
+    most ``target / 2`` of the smaller spacing of it and its neighbour; dots in pixels of zero density never move.
+    Returns the new points (unit coordinates, in ``[0, 1)``) and the number of dots moved in the first pass.
     """
     rows, columns = weights.shape
     size = np.array([columns, rows], dtype=float)
@@ -127,6 +127,9 @@ def spread_apart(positions, spacing, nearest, step_away, target=None, passes=SPR
             moved = close.size
         if close.size == 0:
             break
-        length = 0.5 * (target * spacing[close] - distance[close])
+        # At most half the target times the pair's smaller spacing: a dot on a faint fringe beside a dense blob,
+        # its own spacing tens of degrees, was thrown up to 82 degrees into an empty region (a held-out review).
+        reach = 0.5 * target * np.minimum(spacing[close], spacing[neighbour[close]])
+        length = np.minimum(0.5 * (target * spacing[close] - distance[close]), reach)
         positions[close] = step_away(positions, close, neighbour[close], distance[close], length)
     return positions, moved

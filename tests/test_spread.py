@@ -203,3 +203,18 @@ def test_sphere_maps_spread_in_a_run_and_designs_do_not():
         problem.objective.set_points(result.points)
         energies.append(problem.objective.energy())
     assert energies[1] < 1.01 * energies[0]
+
+
+def test_a_dot_on_a_faint_fringe_moves_no_farther_than_its_dense_neighbour_allows():
+    """A dot whose own spacing is tens of degrees (a faint fringe beside a dense blob) counted as close to its
+    neighbour in the blob and was thrown half that spacing away, up to 82 degrees into an empty region."""
+    lattice = fibonacci_lattice(2000)
+    dense = len(lattice) / (4 * np.pi)
+    spacing = hexagonal_spacing(dense, 1.0)
+    tangent = np.cross(lattice[700], [0.0, 0.0, 1.0])
+    tangent /= np.linalg.norm(tangent)
+    fringe = np.cos(0.5 * spacing) * lattice[700] + np.sin(0.5 * spacing) * tangent
+    points = np.vstack([lattice, fringe])
+    density = np.append(np.full(len(lattice), dense), 1e-3)  # the fringe's own spacing: about 3 radians
+    spread, _ = spread_close_sphere(points, density, target=0.78)
+    assert geodesic(spread[-1], fringe) <= SPREAD_PASSES * 0.5 * 0.78 * spacing
