@@ -233,3 +233,16 @@ def test_a_pen_map_of_a_narrow_peak_is_clipped_and_solved(tmp_path):
     lon, lat = np.radians(np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)).T
     distance = np.degrees(np.arccos(np.clip(np.cos(lat) * np.cos(lon - np.pi), -1, 1)))
     assert 15 < np.percentile(distance, 90) < 90  # spread over a cap around the peak, none on the far side
+
+
+@pytest.mark.parametrize("width, noted", [(2.0, True), (40.0, False)])
+def test_a_narrow_peak_says_why_the_run_is_long(tmp_path, width, noted):
+    """A 1-3 degree peak raised the degree many times over and ran for minutes, without a word (a held-out
+    review)."""
+    latitude = np.linspace(89, -89, 90)[:, None]
+    longitude = np.linspace(-179, 179, 180)[None, :]
+    path = tmp_path / "peak.npy"
+    np.save(path, np.exp(-0.5 * (latitude**2 + longitude**2) / width**2) + 1e-4)
+    result = run(["sphere", path, "-M", 2000, "--iterations", 1, "-o", tmp_path / "d.csv"])
+    assert result.exit_code == 0, result.output
+    assert ("the bandwidth rises from" in result.output) == noted, result.output

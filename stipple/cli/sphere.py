@@ -18,6 +18,7 @@ from .options import (
     resolve_input,
 )
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
+from .torus import peak_note
 
 
 @click.command()
@@ -70,7 +71,7 @@ def sphere(ctx, map_source, **options):
     from ..pipelines.outputs import sphere_files
     from ..pipelines.pen import sphere_pen_density
     from ..render.dots import sphere_canvas
-    from ..sphere import DESIGN_TOL, lon_lat, picture_darkness, sphere_density, sphere_problem
+    from ..sphere import DESIGN_TOL, default_bandwidth, lon_lat, picture_darkness, sphere_density, sphere_problem
     from ..torus import DERIVATIVE_EPSILON
 
     started = time.perf_counter()
@@ -94,6 +95,9 @@ def sphere(ctx, map_source, **options):
             )
             warn_aspect(density, map_source, options)
             density = sphere_pen_density(density, options["n_points"], settings, options["projection"])
+            if options["bandwidth"] is None:  # a narrow peak took minutes, without a word (a held-out review)
+                even, peaked = default_bandwidth(options["n_points"]), default_bandwidth(options["n_points"], density)
+                peak_note(even, peaked, options, "map's densest part", "a narrow peak, lights at night")
             problem = sphere_problem(
                 density,
                 options["n_points"],

@@ -110,7 +110,7 @@ def report_count(count, options):
         click.echo(f"stipple: {line}", err=True)
 
 
-# A note when the image's peak raises the bandwidth this many times over an even image's with the same dots.
+# A note when the input's peak raises the bandwidth this many times over an even input's with the same dots.
 PEAK_NOTE = 2.0
 
 
@@ -118,21 +118,22 @@ def peak_hint(weights, options):
     """A note when a dark peak raises the default bandwidth (``stipple.torus.default_bandwidth``) to resolve its
     dots: a small dark spot on a white 600 x 400 page took 62 s and 2.2 GB for 10000 dots, against seconds for a
     photo, without a word (a held-out review)."""
-    if options["quiet"] or options["bandwidth"] is not None or not isinstance(options["n_points"], int):
-        return
-    import numpy as np
+    if options["bandwidth"] is None and isinstance(options["n_points"], int):
+        import numpy as np
 
-    from ..torus import default_bandwidth
+        from ..torus import default_bandwidth
 
-    even, peaked = (
-        default_bandwidth(options["n_points"], np.ones(weights.shape)),
-        default_bandwidth(options["n_points"], weights),
-    )
-    if peaked >= PEAK_NOTE * even:
+        count = options["n_points"]
+        peak_note(default_bandwidth(count, np.ones(weights.shape)), default_bandwidth(count, weights), options)
+
+
+def peak_note(even, peaked, options, what="image's darkest part", mark="a small dark mark on a light page"):
+    """The note of ``peak_hint`` (and ``stipple sphere``'s) where ``peaked`` is ``PEAK_NOTE`` times ``even``."""
+    if not options["quiet"] and peaked >= PEAK_NOTE * even:
         click.echo(
-            f"stipple: note: the image's darkest part packs its dots far closer than the rest (a small dark mark on "
-            f"a light page): the bandwidth rises from {even} to {peaked} to resolve them, and the run takes longer "
-            "and more memory than an even image's (docs/defaults.md, N at a peak)",
+            f"stipple: note: the {what} packs its dots far closer than the rest ({mark}): the bandwidth rises "
+            f"from {even} to {peaked} to resolve them, and the run takes longer and more memory than an even "
+            "input's (docs/defaults.md, N at a peak)",
             err=True,
         )
 
