@@ -17,6 +17,7 @@ import vpype_cli
 
 from .colour import check_palette_extras, halftone_colour, parse_palette
 from .errors import StippleError
+from .halftone import check_count
 from .line import LINE_ITERATIONS
 from .multiclass import class_slices
 from .pipelines.colour import ink_layers
@@ -154,9 +155,10 @@ def plugin_count(text, image, width, pen_width, options):
 
     if str(text).strip().lower() != "auto":
         try:
-            return int(text)
+            count = int(text)
         except ValueError:
             raise StippleError(f"-M must be a whole number or 'auto', not {text!r}") from None
+        return check_count(count)  # before the pen's density divides by it (-M 0: a numpy warning, then the error)
     darkness = ink_darkness(image, parse_palette(options["separation"]), options["black"])
     count = auto_count(darkness, width * CSS_PIXEL_MM, options["dot_style"], pen_width * CSS_PIXEL_MM)
     for line in (count.reason(), count.note()):

@@ -1,6 +1,8 @@
 """``-M auto``: the pen dot's ink against the drawn preview, the count on constant images by hand, the cap, and
 the command line's messages and metadata."""
 
+import warnings
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -212,6 +214,7 @@ def test_vpype_plugin_auto_count(tmp_path):
         ("--dot-radius -1mm", "--dot-radius must be a positive length"),
         ("--seed -1", "--seed must be an integer"),
         ("--palette cmy --black 0.5", "--black is for --palette cmyk"),
+        ("-M 0", "number of points must be an integer in"),  # after a numpy divide-by-zero warning
     ],
 )
 def test_vpype_plugin_refuses_bad_options_in_one_line(tmp_path, options, message):
@@ -221,7 +224,8 @@ def test_vpype_plugin_refuses_bad_options_in_one_line(tmp_path, options, message
     import vpype_cli
 
     image = flat_gray(tmp_path, 0.3, size=16)
-    with pytest.raises(click.ClickException, match=message):
+    with warnings.catch_warnings(), pytest.raises(click.ClickException, match=message):
+        warnings.simplefilter("error", RuntimeWarning)  # one line: no numpy warning before it
         vpype_cli.execute(f"stipple -M 40 --iterations 2 {options} {image}")
 
 
