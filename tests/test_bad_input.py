@@ -356,3 +356,12 @@ def test_resuming_with_another_palette_names_the_palette(files):
     assert CliRunner().invoke(main, [str(a) for a in base + ["--palette", "cmy"]]).exit_code == 0
     text = invoke(base + ["--resume", "--palette", "cmyk"])
     assert "--palette (the inks) differs" in text
+
+
+def test_a_deeply_nested_npy_header_gets_a_short_line(files):
+    """numpy's message quoted the whole header: one line of 6 KB (a hostile review)."""
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': " + "(" * 3000 + "2,2" + ")" * 3000 + ", }"
+    header += " " * (-(len(header) + 11) % 64) + "\n"
+    data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(32)
+    text = invoke(["torus", write(files[0] / "deep.npy", data), "-M", 30, "-q", "-o", files[2]])
+    assert "corrupt or truncated .npy" in text and len(text) < 400

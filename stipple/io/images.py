@@ -124,7 +124,9 @@ def _npy_header(data, name):
     except (ValueError, TypeError, SyntaxError, OverflowError, EOFError, UnicodeError) as error:
         if isinstance(error, StippleError):
             raise
-        raise StippleError(f"{name}: corrupt or truncated .npy file ({error})") from None
+        reason = " ".join(str(error).split())  # numpy's message quotes the header: a line of 6 KB for a deep one
+        reason = reason if len(reason) <= 200 else reason[:197] + "..."
+        raise StippleError(f"{name}: corrupt or truncated .npy file ({reason})") from None
     if any(size < 0 for size in shape):
         raise StippleError(f"{name}: corrupt .npy file (negative size in shape {shape})")
     return tuple(int(size) for size in shape), bool(fortran), dtype, stream.tell()
