@@ -1,4 +1,5 @@
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -133,6 +134,12 @@ def test_missing_and_blank_inputs(tmp_path):
     Image.new("L", (8, 8), 255).save(blank)
     result = run(["torus", blank, "-q"])
     assert result.exit_code == 1 and "blank" in result.output
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # the peak note's ratio divided by the zero mean first
+        result = run(["torus", blank])
+    assert result.exit_code == 1 and result.output.strip().splitlines() == [
+        "Error: the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
+    ]
 
 
 def test_image_from_stdin(image_path):
