@@ -406,9 +406,9 @@ def _analysis_canvas(size, dots, samples_per_dot, periodic, fewest):
     6-pixel mark of luminance 0.05 came out 0.17 at its core (0.05 at half the average's share for the densest
     dots: sigma 4 px RMSE 0.0040 -> 0.0027, the darkest tenth 0.061 -> 0.021).
     """
-    room = 0.98 * MAX_GRID_PIXELS / Canvas.widening(size, periodic, fewest)  # 2 % for the margins' whole cells
+    room = 0.98 * MAX_GRID_PIXELS / Canvas.widening(size, periodic, fewest, dots)  # 2 % for the margins' cells
     grid = _grid(size, min(samples_per_dot * dots, room))
-    return grid, Canvas.around(size, grid, periodic, fewest)
+    return grid, Canvas.around(size, grid, periodic, fewest, dots)
 
 
 def _grid(size, pixels):

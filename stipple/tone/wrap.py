@@ -18,9 +18,10 @@ import numpy as np
 # edges on three photos (docs/performance.md).
 WRAP_SPACINGS = 3
 MAX_WRAP_SHARE = 0.15
-# ... but never less than this many spacings: a strip a few dots high (600 x 3 px, 1500 dots) had a margin of 0.15 of
-# its height, less than a spacing, its edge dots had no neighbours across the edges and grew, and it came out
-# 0.028 darker on average (600 x 2: 0.034); with one spacing 0.002.
+# ... but never less than this many mean spacings of all the dots: a strip a few dots high (600 x 3 px, 1500 dots) had
+# a margin of 0.15 of its height, less than a spacing, its edge dots had no neighbours across the edges and grew, and
+# it came out 0.028 darker on average (600 x 2: 0.034); with one spacing 0.002. (Of all the dots, not of the sparsest
+# ink: a colour photo's cyan of 3 dots widened the canvas to five pictures, its command 17.7 -> 23 s and 1 GiB.)
 MIN_WRAP_SPACINGS = 1
 
 
@@ -38,16 +39,16 @@ class Canvas:
         self.grid = (rows + 2 * self.margin[0], columns + 2 * self.margin[1])
 
     @classmethod
-    def around(cls, size, grid, periodic, fewest):
+    def around(cls, size, grid, periodic, fewest, dots=None):
         """The picture's canvas, or (``periodic``) the one that wraps ``wrap_shares`` of the picture around it."""
         rows, columns = grid
-        share_x, share_y = wrap_shares(size, periodic, fewest)
+        share_x, share_y = wrap_shares(size, periodic, fewest, dots)
         return cls(size, grid, (int(np.ceil(share_y * rows)), int(np.ceil(share_x * columns))))
 
     @staticmethod
-    def widening(size, periodic, fewest):
+    def widening(size, periodic, fewest, dots=None):
         """How many times the picture's area the canvas ``around`` it covers (before rounding to whole cells)."""
-        share_x, share_y = wrap_shares(size, periodic, fewest)
+        share_x, share_y = wrap_shares(size, periodic, fewest, dots)
         return (1 + 2 * share_x) * (1 + 2 * share_y)
 
     def widen(self, image):
@@ -64,16 +65,19 @@ class Canvas:
         return positions + self.offset
 
 
-def wrap_shares(size, periodic, fewest):
+def wrap_shares(size, periodic, fewest, dots=None):
     """``(x, y)``: the periodic canvas's margin on each side as a share of the picture's width and height,
-    ``WRAP_SPACINGS`` mean spacings of ``fewest`` dots, at most ``MAX_WRAP_SHARE`` unless that is less than
-    ``MIN_WRAP_SPACINGS``; ``(0, 0)`` if not ``periodic``."""
+    ``WRAP_SPACINGS`` mean spacings of ``fewest`` dots (the sparsest ink's), at most ``MAX_WRAP_SHARE`` unless
+    that is less than ``MIN_WRAP_SPACINGS`` mean spacings of all the ``dots`` (default ``fewest``); ``(0, 0)`` if
+    not ``periodic``."""
     if not periodic:
         return 0.0, 0.0
     width, height = size
-    spacing = np.sqrt(width * height / max(fewest, 1))
-    spacings = [spacing / extent for extent in (width, height)]  # one spacing, as a share of each side
-    return tuple(min(WRAP_SPACINGS * one, max(MAX_WRAP_SHARE, MIN_WRAP_SPACINGS * one)) for one in spacings)
+    sparsest, mean = (np.sqrt(width * height / max(count, 1)) for count in (fewest, dots or fewest))
+    return tuple(
+        min(WRAP_SPACINGS * sparsest / extent, max(MAX_WRAP_SHARE, MIN_WRAP_SPACINGS * mean / extent))
+        for extent in (width, height)
+    )
 
 
 def wrapped_copies(centres, size, margin):
