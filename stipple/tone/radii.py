@@ -16,7 +16,8 @@ FULL = 0.999
 # Fine pixels per analysis-grid pixel along each axis where the grid leaves room (``analysis_supersample``): at 2
 # a light tone's dot, a grid pixel across, was drawn a fine pixel or two off and the corrections fitted that noise
 # (a flat 0.97 page's radii 10 % apart); 4 drew held-out photos 10-40 % closer at sigma 4 px (docs/picture.md).
-ANALYSIS_SUPERSAMPLE = 4
+# Only the drawings that the last FINE_PASSES corrections read need it: the same pictures, the drawing's time of 2.
+ANALYSIS_SUPERSAMPLE, COARSE_SUPERSAMPLE, FINE_PASSES = 4, 2, 2
 SAMPLES_PER_DOT = 24
 STEP_BOUNDS = (0.5, 2.0)
 REGULARISATION = 0.003
@@ -122,8 +123,8 @@ def tone_radii(
     dots = len(centres) * max(1.0, densest_ratio(centres, darkness, size) / 2)
     grid, canvas = _analysis_canvas(size, dots, samples_per_dot, periodic, len(centres))
     ink = _Ink(canvas.place(centres), canvas.size, canvas.grid, canvas.widen(_resample(darkness, grid)), bounds)
-    for _ in range(passes):
-        ink.correct(ink.target)
+    for index in range(passes):
+        ink.correct(ink.target, fine=index >= passes - FINE_PASSES)
     return ink.final()[: len(centres)]
 
 
@@ -214,13 +215,14 @@ def tone_radii_layers(
     if total == 0:
         return [np.zeros(0) for _ in checked]
     canvas, grid, inks = _joint_inks(checked, size, samples_per_dot, bounds, max_ratio_any, periodic)
-    drawn = [ink.draw() if ink else np.zeros(canvas.grid, np.float32) for ink in inks]
+    # A correction reads the drawings made in the pass before: fine for the last FINE_PASSES corrections.
+    drawn = [ink.draw(passes <= FINE_PASSES) if ink else np.zeros(canvas.grid, np.float32) for ink in inks]
     channels = [np.flatnonzero(a > 0) for a in absorb]
     goal = {
         ch: canvas.widen(_resample(target[..., ch], grid)).astype(np.float32) for ch in set().union(*map(set, channels))
     }
     goals = [{ch: ink.mean(goal[ch]) for ch in chans} if ink else {} for ink, chans in zip(inks, channels, strict=True)]
-    for _ in range(passes):
+    for index in range(passes):
         for k, ink in enumerate(inks):
             if ink is None or not len(channels[k]):
                 continue
@@ -235,7 +237,7 @@ def tone_radii_layers(
                 step += (goals[k][ch] - ink.mean(colour)) * slope
                 norm += slope * slope
             ink.correct(np.clip(ink.covered + step / (norm + REGULARISATION), 0.0, 1.0))
-            drawn[k] = ink.draw()
+            drawn[k] = ink.draw(index >= passes - FINE_PASSES - 1)
     return [ink.final()[: len(c)] if ink else np.zeros(0) for ink, (c, _) in zip(inks, checked, strict=True)]
 
 
@@ -347,18 +349,18 @@ class _Ink:
         """Radii within the dots' bounds; dots without a cell take their pixel owner's radius."""
         return np.clip(radii[self.owner], self.floor, self.cap)
 
-    def draw(self):
-        """The union of the discs on the grid, and each cell's covered fraction."""
-        self.drawn = union_coverage_image(
-            self.centres, self.radii, self.size, self.grid, supersample=analysis_supersample(self.grid)
-        )
+    def draw(self, fine=True):
+        """The union of the discs on the grid (``fine``, or ``COARSE_SUPERSAMPLE``) and each cell's covered fraction."""
+        supersample = analysis_supersample(self.grid, ANALYSIS_SUPERSAMPLE if fine else COARSE_SUPERSAMPLE)
+        self.drawn = union_coverage_image(self.centres, self.radii, self.size, self.grid, supersample=supersample)
         self.covered = np.clip(self.mean(self.drawn), 0.0, 1.0)
         return self.drawn
 
-    def correct(self, wanted):
-        """Step each radius towards the coverage ``wanted`` in its cell: ``(f^-1(wanted) / f^-1(c))^(DAMPING / 2)``."""
+    def correct(self, wanted, fine=True):
+        """Step each radius towards the coverage ``wanted`` in its cell: ``(f^-1(wanted) / f^-1(c))^(DAMPING / 2)``
+        (``c`` from the latest drawing, or a new one, ``fine`` or not)."""
         if self.covered is None:
-            self.draw()
+            self.draw(fine)
         with np.errstate(divide="ignore", invalid="ignore"):
             factor = np.sqrt(ink_ratio(wanted) / ink_ratio(self.covered))
         factor = np.where(self.covered > 0, factor, STEP_BOUNDS[1])
@@ -372,11 +374,10 @@ class _Ink:
         return np.clip(self.radii, self.min_radius, self.cap)
 
 
-def analysis_supersample(grid):
-    """``ANALYSIS_SUPERSAMPLE``, or fewer where the fine pixels would pass the drawing's bound (``check_picture``):
-    a million dots' grid, at ``MAX_GRID_PIXELS``, draws at 2."""
+def analysis_supersample(grid, most=ANALYSIS_SUPERSAMPLE):
+    """``most``, or fewer where the fine pixels would pass the drawing's bound (``check_picture``)."""
     rows, columns = grid
-    return max(1, min(ANALYSIS_SUPERSAMPLE, int(np.sqrt(4 * MAX_GRID_PIXELS / (rows * columns)))))
+    return max(1, min(most, int(np.sqrt(4 * MAX_GRID_PIXELS / (rows * columns)))))
 
 
 def canvas_pixels(centres, size, shape):
