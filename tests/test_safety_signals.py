@@ -140,3 +140,13 @@ def test_a_second_signal_after_the_first_is_ignored_on_the_way_out():
     with SignalGuard():  # no signal: the handler from before is back
         pass
     assert signal.getsignal(signal.SIGINT) == previous
+
+
+def test_a_run_under_nohup_ignores_sighup(folder):
+    """nohup ignores SIGHUP before the program starts: the guard took it back, and a logout stopped the run
+    (exit 129, the outputs of the iterations so far) where it used to go on (a code review)."""
+    script = "import signal\nsignal.signal(signal.SIGHUP, signal.SIG_IGN)\n" + CHILD
+    args = ["fsync", "1", "SIGHUP", "torus", "in.png", *FAST, *OUTPUTS]
+    result = subprocess.run([sys.executable, "-c", script, *args], cwd=folder, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert leftovers(folder) == [] and (folder / "a.csv").read_text().startswith("x,y")

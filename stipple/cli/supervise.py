@@ -75,6 +75,8 @@ class SignalGuard:
         self.signal, self.deferring, self.unwinding = None, False, False
         for number in STOP_SIGNALS:
             try:
+                if signal.getsignal(number) is signal.SIG_IGN:  # nohup's SIGHUP, a script's background job's SIGINT
+                    continue
                 self._previous[number] = signal.signal(number, self._handle)
             except ValueError:  # not the main thread: leave signals alone
                 break

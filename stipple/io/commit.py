@@ -94,8 +94,8 @@ def commit_outputs(items):
     """Write every ``(path, bytes)`` of ``items`` all-or-nothing (``-`` is stdout).
 
     Each file is first written to a temporary file beside it (flushed and fsynced); only when all of
-    them are written (and stdout has taken its share) are they renamed over their targets, with SIGINT
-    and SIGTERM held back during the renames. Any failure or signal before that removes every temporary
+    them are written (and stdout has taken its share) are they renamed over their targets, with
+    ``STOP_SIGNALS`` held back during the renames. Any failure or signal before that removes every temporary
     file and leaves every existing output as it was.
     """
     with StagedOutputs() as staged:
@@ -109,7 +109,7 @@ class StagedOutputs:
 
     ``add`` writes one file's temporary (fsynced) beside its target at once, so that a long run (the frames of
     a video) need not hold every file in memory; ``-`` (stdout) is kept until ``commit``. ``commit`` writes
-    stdout, then renames every temporary with SIGINT and SIGTERM held back. Leaving the ``with`` block without
+    stdout, then renames every temporary with ``STOP_SIGNALS`` held back. Leaving the ``with`` block without
     a commit (an error, a signal) removes every temporary file and leaves every existing output as it was.
     """
 
@@ -288,7 +288,8 @@ def _signals_held():
     previous = {}
     try:
         for number in STOP_SIGNALS:
-            previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
+            if signal.getsignal(number) is not signal.SIG_IGN:  # ignored by the caller (nohup): left so
+                previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
     except ValueError:  # not the main thread: signals cannot be handled here anyway
         pass
     try:
