@@ -255,3 +255,17 @@ def test_checkpoint_every_without_a_checkpoint_is_refused(image_path, tmp_path):
     result = run([*args, "--checkpoint-every", 5])
     assert result.exit_code == 1 and "--checkpoint-every is for --checkpoint" in result.output
     assert run([*args, "--checkpoint-every", 5, "--checkpoint", tmp_path / "c.npz"]).exit_code == 0
+
+
+@pytest.mark.parametrize("command", [["torus", "IMAGE"], ["sphere", "builtin:gaussians"]])
+@pytest.mark.parametrize("count", ["0", "-5"])
+def test_a_count_below_one_is_one_line_before_the_peak_note(image_path, command, count):
+    """The peak note computed its bandwidth from -M before the count was checked: a traceback for -M -5, a numpy
+    warning and 'the bandwidth rises from 0 to 0' for -M 0 (a code review)."""
+    command = [image_path if part == "IMAGE" else part for part in command]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        result = run([*command, "-M", count, "-o", "-"])
+    assert result.exit_code == 1 and result.output.strip().splitlines() == [
+        f"Error: number of points must be an integer in [1, 20000000], not {count}"
+    ], result.output

@@ -120,13 +120,12 @@ def peak_hint(weights, options):
     photo, without a word (a held-out review)."""
     import numpy as np
 
-    # A blank image is refused by the run itself (its peak ratio divides by a zero mean).
-    if options["quiet"] or options["bandwidth"] is not None or not isinstance(options["n_points"], int):
+    count = options["n_points"]  # "auto", or not yet checked: -M 0 and -M -5 are refused by the run itself
+    if options["quiet"] or options["bandwidth"] is not None or not isinstance(count, int) or count < 1:
         return
-    if np.any(weights > 0):
+    if np.any(weights > 0):  # a blank image is refused by the run itself (its peak ratio divides by zero)
         from ..torus import default_bandwidth
 
-        count = options["n_points"]
         peak_note(default_bandwidth(count, np.ones(weights.shape)), default_bandwidth(count, weights), options)
 
 
