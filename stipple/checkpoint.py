@@ -185,8 +185,9 @@ def _metadata(path, text):
 
 
 def _check_matches(path, metadata, problem):
-    saved = metadata["settings"]
-    differ = [key for key, value in problem.settings.items() if saved.get(key) != value]
+    saved, current = metadata["settings"], problem.settings
+    # Over both sides' keys: a colour run's classes and a progressive run's order are missing from the other's.
+    differ = [key for key in {**saved, **current} if saved.get(key) != current.get(key)]
     if "domain" in differ:
         raise StippleError(
             f"{path}: checkpoint is of a {COMMANDS.get(saved.get('domain'), 'another')} run, not of this one"
@@ -197,10 +198,7 @@ def _check_matches(path, metadata, problem):
         what = SETTING_NAMES.get(differ[0], differ[0])
         if differ[0] in ("points", "shape"):
             what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
-        elif differ[0] == "metric" and saved.get("domain") == "torus":
-            # Only --order progressive solves an image in the flat metric, at a bandwidth of its own.
-            what = "--order progressive"
-        details = "; ".join(f"{key} was {_short(saved.get(key))}, now {problem.settings[key]!r}" for key in differ[:2])
+        details = "; ".join(f"{key} was {_short(saved.get(key))}, now {current.get(key)!r}" for key in differ[:2])
         raise StippleError(
             f"{path}: checkpoint is for a different run: {what} differs ({details}); "
             "resume with the same image and options"
@@ -215,12 +213,13 @@ def _check_matches(path, metadata, problem):
 SETTING_NAMES = {
     "bandwidth": "-N (the bandwidth)",
     "length": "--length (the line's length)",
-    "classes": "--palette (the inks)",
-    "class_points": "-M or --palette (the inks' dots)",
+    "classes": "--palette or --black (the inks)",
+    "class_points": "-M, --palette or --black (the inks' dots)",
     "class_bandwidths": "-N (the inks' bandwidths)",
-    "term_weights": "--black or --union-weight",
+    "term_weights": "--union-weight",
+    "order": "--order progressive",
 }
-FIRST_NAMED = ["classes", "points", "shape", "metric", "length", "term_weights", "class_points", "class_bandwidths"]
+FIRST_NAMED = ["classes", "order", "points", "shape", "length", "term_weights", "class_points", "class_bandwidths"]
 COMMANDS = {"torus": "stipple torus or colour", "sphere": "stipple sphere or design", "line": "stipple line"}
 
 

@@ -355,7 +355,7 @@ def test_resuming_with_another_palette_names_the_palette(files):
     base = ["torus", files[1], "-M", 60, "-N", 8, "--iterations", 2, "-q", "-o", files[2], "--checkpoint", path]
     assert CliRunner().invoke(main, [str(a) for a in base + ["--palette", "cmy"]]).exit_code == 0
     text = invoke(base + ["--resume", "--palette", "cmyk"])
-    assert "--palette (the inks) differs" in text
+    assert "--palette or --black (the inks) differs" in text
 
 
 def test_a_deeply_nested_npy_header_gets_a_short_line(files):
@@ -365,3 +365,20 @@ def test_a_deeply_nested_npy_header_gets_a_short_line(files):
     data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(32)
     text = invoke(["torus", write(files[0] / "deep.npy", data), "-M", 30, "-q", "-o", files[2]])
     assert "corrupt or truncated .npy" in text and len(text) < 400
+
+
+@pytest.mark.parametrize(
+    "first, then, named",
+    [
+        (["--palette", "cmy"], [], "--palette or --black (the inks) differs"),  # it said --order progressive
+        (["--palette", "cmyk", "--black", "0.5"], ["--palette", "cmyk"], "--palette or --black"),  # and -M
+        (["--palette", "cmy", "--union-weight", "2"], ["--palette", "cmy"], "--union-weight differs"),
+    ],
+)
+def test_a_colour_resume_names_the_colour_option_changed(files, first, then, named):
+    """Compared over the current problem's settings only, a colour checkpoint resumed without --palette blamed
+    --order progressive (its union's flat metric), and --black was named as '-M or --palette' (a code review)."""
+    path = files[0] / "colour.npz"
+    base = ["torus", files[1], "-M", 60, "-N", 8, "--iterations", 2, "-q", "-o", files[2], "--checkpoint", path]
+    assert CliRunner().invoke(main, [str(a) for a in base + first]).exit_code == 0
+    assert named in invoke(base + ["--resume", *then])
