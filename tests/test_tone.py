@@ -418,17 +418,20 @@ def test_a_flat_light_page_gets_even_dots():
     assert radii.std() / radii.mean() < 0.065 and radii.max() / radii.min() < 1.6
 
 
-def test_a_strip_two_pixels_high_keeps_its_tone():
+@pytest.mark.parametrize("width, count", [(40, 100), (600, 150)])
+def test_a_strip_two_pixels_high_keeps_its_tone(width, count):
     """The periodic canvas's margin was at most 0.15 of a side: less than a dot spacing on a strip a few dots high,
-    whose edge dots then had no neighbours across the edges, grew, and drew a 0.5 gray as 0.47."""
+    whose edge dots then had no neighbours across the edges, grew, and drew a 0.5 gray as 0.47. With fewer dots
+    than the strip is long over high, one spacing is more than its height: such a margin's outer part had
+    darkness but no dots (0.434)."""
     from stipple.torus import halftone_torus
 
-    darkness = np.full((2, 40), 0.5)
-    centres = halftone_torus(darkness, 100, threads=1, seed=0).points * [40, 2]
-    radii = tone_radii(centres, darkness, (40, 2), periodic=True)
-    copies, origin = stipple.tone.wrap.wrapped_copies(centres, (40, 2), np.array([40.0, 2.0]))
-    drawn = union_coverage_image(copies, radii[origin], (40, 2), (8, 160), supersample=4)
-    assert abs(drawn.mean() - 0.5) < 0.01, drawn.mean()
+    darkness = np.full((2, width), 0.5)
+    centres = halftone_torus(darkness, count, threads=1, seed=0).points * [width, 2]
+    radii = tone_radii(centres, darkness, (width, 2), periodic=True)
+    copies, origin = stipple.tone.wrap.wrapped_copies(centres, (width, 2), np.array([width, 2.0]))
+    drawn = union_coverage_image(copies, radii[origin], (width, 2), (8, 4 * width), supersample=4)
+    assert abs(drawn.mean() - 0.5) < 0.015, drawn.mean()
 
 
 def test_a_sparse_ink_keeps_the_wrapped_margin_at_its_cap():
@@ -439,3 +442,4 @@ def test_a_sparse_ink_keeps_the_wrapped_margin_at_its_cap():
     assert wrap_shares((300, 200), True, 3, 30000) == (MAX_WRAP_SHARE, MAX_WRAP_SHARE)
     share_x, share_y = wrap_shares((600, 3), True, 1500, 1500)  # a strip: one spacing, more than 0.15 of 3 px
     assert share_x == pytest.approx(3 * np.sqrt(1.2) / 600) and share_y == pytest.approx(np.sqrt(1.2) / 3)
+    assert wrap_shares((600, 2), True, 150, 150)[1] == 1.0  # one spacing, 2.8 px, more than the side

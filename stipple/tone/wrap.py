@@ -74,8 +74,10 @@ def wrap_shares(size, periodic, fewest, dots=None):
         return 0.0, 0.0
     width, height = size
     sparsest, mean = (np.sqrt(width * height / max(count, 1)) for count in (fewest, dots or fewest))
+    # At most the whole side: the dots are copied one period across (``wrapped_copies``), and a wider margin's
+    # outer part had darkness but no dots (150 dots on a 600 x 2 strip drew 0.5 gray as 0.434).
     return tuple(
-        min(WRAP_SPACINGS * sparsest / extent, max(MAX_WRAP_SHARE, MIN_WRAP_SPACINGS * mean / extent))
+        min(WRAP_SPACINGS * sparsest / extent, max(MAX_WRAP_SHARE, MIN_WRAP_SPACINGS * mean / extent), 1.0)
         for extent in (width, height)
     )
 
