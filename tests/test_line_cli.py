@@ -161,3 +161,40 @@ def test_vpype_stippleline_adds_one_closed_line_in_page_units(ramp_path):
     segments = np.abs(np.diff(path))
     assert segments.max() <= 1.05 * segments.mean()
     assert np.sum(path.real < 48 * millimetre) > 2 * np.sum(path.real >= 48 * millimetre)  # dark on the left
+
+
+@pytest.mark.parametrize("penalty", [0, -1.0, "NaN"])
+def test_a_checkpoint_with_a_bad_penalty_is_refused_in_one_line(ramp_path, tmp_path, penalty):
+    """The phase count taken from the saved penalty weight (its logarithm) raised a math domain error; before it,
+    a penalty of 0 ran silently (a code review)."""
+    import json
+    import zipfile
+
+    checkpoint = tmp_path / "run.npz"
+    args = [
+        "line",
+        ramp_path,
+        "-M",
+        200,
+        "-q",
+        "--iterations",
+        10,
+        "--checkpoint",
+        checkpoint,
+        "-o",
+        tmp_path / "a.csv",
+    ]
+    assert run(args).exit_code == 0
+    with zipfile.ZipFile(checkpoint) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    metadata = json.loads(str(np.load(checkpoint)["metadata"]))
+    metadata["settings"]["penalty"] = float(penalty) if penalty != "NaN" else float("nan")
+    buffer = tmp_path / "metadata.npy"
+    np.save(buffer, np.asarray(json.dumps(metadata)))
+    members["metadata.npy"] = buffer.read_bytes()
+    with zipfile.ZipFile(checkpoint, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    result = run([*args, "--resume"])
+    assert result.exit_code == 1 and "corrupt checkpoint metadata (penalty" in result.output, result.output
+    assert "Traceback" not in result.output

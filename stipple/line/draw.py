@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from ..checkpoint import Checkpointer, saved_settings
+from ..errors import StippleError
 from ..halftone import chain_callbacks, run
 from ..io.images import load_density
 from ..torus import check_weights
@@ -71,7 +72,9 @@ def draw_line(
     weights = check_weights(load_density(image) if isinstance(image, (str, os.PathLike)) else image)
     penalty, done = initial_penalty, 0
     if resume and checkpoint is not None:
-        penalty = float(saved_settings(checkpoint).get("penalty", 1.0))
+        penalty = saved_settings(checkpoint).get("penalty", 1.0)
+        if isinstance(penalty, bool) or not isinstance(penalty, (int, float)) or not 0 < penalty < float("inf"):
+            raise StippleError(f"{checkpoint}: corrupt checkpoint metadata (penalty {penalty!r})")
         done = phases_before(penalty, initial_penalty)
     phase_cap = max(1, iterations // 4) if phase_iterations is None else phase_iterations
     build = functools.partial(
