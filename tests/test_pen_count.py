@@ -116,6 +116,11 @@ def test_under_invert_the_note_names_the_light_tones(tmp_path):
     assert result.exit_code == 0, result.output
     assert f"tones lighter than {reachable_tone('filled'):.0%} will be darker" in result.output, result.output
     assert "lightest 1 % is 90% light" in result.output
+    # -M auto's own lines alike (they still named the dark tones: a code review)
+    auto = ["torus", str(image), "-M", "auto", "--iterations", "2", "--invert", "--dot-style", "filled"]
+    result = CliRunner().invoke(main, [*auto, "-o", str(tmp_path / "auto.svg")])
+    assert result.exit_code == 0, result.output
+    assert "lighter ones drawn at" in result.output and "lightest 1 % is 90% light" in result.output, result.output
 
 
 def test_too_few_point_dots_for_the_ink_get_a_note_with_the_count_that_carries_it(tmp_path):

@@ -31,7 +31,7 @@ def counted_recipe(recipe, weights):
         return recipe, None
     draw = recipe.draw
     paper, pen = paper_and_pen(draw)
-    count = auto_count(weights, paper, draw["dot_style"], pen)
+    count = replace(auto_count(weights, paper, draw["dot_style"], pen), inverted=bool(recipe.load.get("invert")))
     lines = [line for line in (count.reason(), count.note()) if line]
     recipe = replace(
         recipe,

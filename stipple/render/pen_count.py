@@ -38,6 +38,9 @@ PEN_STYLES = ("point", "filled", "circle")
 # dots of the cameraman).
 NEIGHBOUR_RATIO = 0.82
 DARKEST_PERCENTILE = 99.0
+# The words of the unreachable tones' note: black dots on paper, and light dots on a dark ground (--invert).
+TONE_WORDS = ("darker", "lighter", "darkest", "dark")
+INVERTED_WORDS = ("lighter", "darker", "lightest", "light")
 
 
 @dataclass
@@ -53,6 +56,7 @@ class PenCount:
     paper_area: float
     reachable: float
     darkest: float
+    inverted: bool = False  # light dots on a dark ground (--invert): the light tones are the ones out of reach
 
     @property
     def capped(self):
@@ -61,8 +65,9 @@ class PenCount:
     def reason(self):
         """One line: the chosen M and why."""
         if self.capped:
+            beyond = INVERTED_WORDS[0] if self.inverted else TONE_WORDS[0]
             why = (
-                f"the ink of the tones the pen reaches without touching, darker ones drawn at "
+                f"the ink of the tones the pen reaches without touching, {beyond} ones drawn at "
                 f"{self.reachable:.0%} ({self.tone_points} would carry all the ink)"
             )
         else:
@@ -73,9 +78,10 @@ class PenCount:
         """A line when the image's darkest tones are beyond the packing's reach, else None."""
         if self.darkest <= self.reachable:
             return None
+        beyond, drawn, extreme, tone = INVERTED_WORDS if self.inverted else TONE_WORDS
         return (
-            f"tones darker than {self.reachable:.0%} will be lighter: the pen's dots cannot pack closer without "
-            f"touching (the image's darkest 1 % is {self.darkest:.0%} dark)"
+            f"tones {beyond} than {self.reachable:.0%} will be {drawn}: the pen's dots cannot pack closer without "
+            f"touching (the image's {extreme} 1 % is {self.darkest:.0%} {tone})"
         )
 
     def details(self):
@@ -201,9 +207,6 @@ def clipped_density(darkness, allowed, cell_areas=None):
     return np.minimum(darkness, low)
 
 
-# The words of the unreachable tones' note: black dots on paper, and light dots on a dark ground (--invert).
-TONE_WORDS = ("darker", "lighter", "darkest", "dark")
-INVERTED_WORDS = ("lighter", "darker", "lightest", "light")
 # A point pen's dots with a given -M that carry less than this share of the image's ink get a note.
 LIGHT_SHARE = 0.8
 
