@@ -269,3 +269,20 @@ def test_a_count_below_one_is_one_line_before_the_peak_note(image_path, command,
     assert result.exit_code == 1 and result.output.strip().splitlines() == [
         f"Error: number of points must be an integer in [1, 20000000], not {count}"
     ], result.output
+
+
+def test_the_peak_note_counts_a_pens_clipping_of_the_density(tmp_path):
+    """A pen's dots are placed by the density clipped where they would pack too close: the note quoted the
+    unclipped peak's bandwidth, not the run's (a code review)."""
+    import re
+
+    rows, columns = np.mgrid[0:60, 0:90]
+    darkness = np.exp(-((rows - 30.0) ** 2 + (columns - 45.0) ** 2) / 2.0)
+    Image.fromarray((255 * (1 - darkness)).astype(np.uint8)).save(tmp_path / "spot.png")
+    arguments = ["torus", tmp_path / "spot.png", "-M", 300, "--iterations", 1, "--no-correct", "-o", tmp_path / "d.svg"]
+    quoted = []
+    for pen in ([], ["--dot-style", "point", "--pen-width", "0.5mm"]):
+        result = run([*arguments, *pen])
+        assert result.exit_code == 0, result.output
+        quoted.append(int(re.search(r"rises from \d+ to (\d+)", result.output).group(1)))
+    assert quoted[1] < 0.7 * quoted[0], quoted  # 328 and 178; both 328 before

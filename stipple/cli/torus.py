@@ -11,6 +11,7 @@ from .options import (
     given_count_hint,
     init_input,
     palette_options,
+    render_settings,
     resolve_input,
     warn_beyond,
 )
@@ -124,9 +125,11 @@ def peak_hint(weights, options):
     if options["quiet"] or options["bandwidth"] is not None or not isinstance(count, int) or count < 1:
         return
     if np.any(weights > 0):  # a blank image is refused by the run itself (its peak ratio divides by zero)
+        from ..pipelines.pen import placement_density
         from ..torus import default_bandwidth
 
-        peak_note(default_bandwidth(count, np.ones(weights.shape)), default_bandwidth(count, weights), options)
+        placed = placement_density(weights, count, render_settings(options))  # a pen's clipping, as the run's
+        peak_note(default_bandwidth(count, np.ones(weights.shape)), default_bandwidth(count, placed), options)
 
 
 def peak_note(even, peaked, options, what="image's darkest part", mark="a small dark mark on a light page"):
