@@ -246,3 +246,17 @@ def test_a_narrow_peak_says_why_the_run_is_long(tmp_path, width, noted):
     result = run(["sphere", path, "-M", 2000, "--iterations", 1, "-o", tmp_path / "d.csv"])
     assert result.exit_code == 0, result.output
     assert ("the bandwidth rises from" in result.output) == noted, result.output
+
+
+def test_the_equirect_map_wraps_at_its_left_and_right_edges(tmp_path):
+    """Longitude wraps, but the map's radii were found as if its left and right edges were a frame: a flat 50 %
+    gray map's first columns came out 204, 148, 96 for 128, a light line and a dark band (a held-out review)."""
+    path = tmp_path / "gray.png"
+    Image.new("L", (360, 180), 128).save(path)
+    png = tmp_path / "map.png"
+    arguments = ["sphere", path, "-M", 3000, "--iterations", 30, "--projection", "equirect", "-q", "--png-width", 1024]
+    assert run([*arguments, "-o", png]).exit_code == 0
+    gray = np.asarray(Image.open(png).convert("L"), dtype=float)[64:-64]  # away from the poles
+    interior = gray[:, 20:-20].mean()
+    edges = np.concatenate([gray[:, :3].mean(axis=0), gray[:, -3:].mean(axis=0)])
+    assert np.abs(edges - interior).max() < 25, (edges, interior)

@@ -197,13 +197,13 @@ def tone_dots(layers, size, coverages, *, target=None, periodic=False):
     target : numpy.ndarray, optional
         ``(H, W, 3)`` colour the inks, multiplied on white paper, must print; then the inks are corrected
         together against the drawn colour (``stipple.tone.tone_radii_layers``), otherwise each alone.
-    periodic : bool
-        The canvas wraps around, as the torus the dots were placed on (``periodic_tone_dots``). Otherwise dots
-        that would cross the canvas's edge move inwards just enough (``fit_inside``, "clamp"): the picture stays
-        registered with the image.
+    periodic : bool or "x"
+        The canvas wraps around, as the torus the dots were placed on (``periodic_tone_dots``), or along x only
+        (an equirectangular map). Otherwise dots that would cross the canvas's edge move inwards just enough
+        (``fit_inside``, "clamp"): the picture stays registered with the image.
     """
     if periodic:
-        return periodic_tone_dots(layers, size, coverages, target=target)
+        return periodic_tone_dots(layers, size, coverages, target=target, axes=periodic)
     pairs = [(centres, coverage) for (_, _, centres), coverage in zip(layers, coverages, strict=True)]
     colours = None if target is None else [colour for _, colour, _ in layers]
     radii = tone_radii_layers(pairs, size, colours=colours, target=target)
@@ -211,8 +211,9 @@ def tone_dots(layers, size, coverages, *, target=None, periodic=False):
     return [Dots(name, colour, c, r) for (name, colour, _), (c, r) in zip(layers, placed, strict=True)]
 
 
-def periodic_tone_dots(layers, size, coverages, *, target=None):
-    """``tone_dots`` on a canvas that wraps around, as the torus does: a picture without a frame along its edges.
+def periodic_tone_dots(layers, size, coverages, *, target=None, axes=True):
+    """``tone_dots`` on a canvas that wraps around, as the torus does: a picture without a frame along its edges
+    (``axes`` "x": along x only, the top and bottom edges cutting the discs that cross them).
 
     The radii are those the dots need with the dots across each edge as neighbours (``tone_radii_layers(...,
     periodic=True)``), and a dot whose disc crosses an edge is drawn across the opposite one too, each part cut
@@ -221,10 +222,11 @@ def periodic_tone_dots(layers, size, coverages, *, target=None):
     """
     pairs = [(centres, coverage) for (_, _, centres), coverage in zip(layers, coverages, strict=True)]
     colours = None if target is None else [colour for _, colour, _ in layers]
-    radii = tone_radii_layers(pairs, size, colours=colours, target=target, periodic=True)
+    radii = tone_radii_layers(pairs, size, colours=colours, target=target, periodic=axes)
     dots = []
     for (name, colour, centres), coverage, own in zip(layers, coverages, radii, strict=True):
-        placed, origin = wrapped_copies(centres, size, float(own.max()) if len(own) else 0.0)
+        reach = float(own.max()) if len(own) else 0.0
+        placed, origin = wrapped_copies(centres, size, np.array([reach, reach if axes is True else 0.0]))
         radius = own[origin]
         wanted = wanted_copies(placed, origin, coverage, size)
         home = home_indices(origin, wanted, len(centres))

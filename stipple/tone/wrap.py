@@ -69,17 +69,19 @@ def wrap_shares(size, periodic, fewest, dots=None):
     """``(x, y)``: the periodic canvas's margin on each side as a share of the picture's width and height,
     ``WRAP_SPACINGS`` mean spacings of ``fewest`` dots (the sparsest ink's), at most ``MAX_WRAP_SHARE`` unless
     that is less than ``MIN_WRAP_SPACINGS`` mean spacings of all the ``dots`` (default ``fewest``); ``(0, 0)`` if
-    not ``periodic``."""
+    not ``periodic``, and no margin along y where ``periodic`` is "x" (an equirectangular map: longitude wraps,
+    its top and bottom are the poles)."""
     if not periodic:
         return 0.0, 0.0
     width, height = size
     sparsest, mean = (np.sqrt(width * height / max(count, 1)) for count in (fewest, dots or fewest))
     # At most the whole side: the dots are copied one period across (``wrapped_copies``), and a wider margin's
     # outer part had darkness but no dots (150 dots on a 600 x 2 strip drew 0.5 gray as 0.434).
-    return tuple(
+    share_x, share_y = (
         min(WRAP_SPACINGS * sparsest / extent, max(MAX_WRAP_SHARE, MIN_WRAP_SPACINGS * mean / extent), 1.0)
         for extent in (width, height)
     )
+    return share_x, 0.0 if periodic == "x" else share_y
 
 
 def wrapped_copies(centres, size, margin):
