@@ -259,13 +259,14 @@ def test_checkpoint_every_without_a_checkpoint_is_refused(image_path, tmp_path):
 
 @pytest.mark.parametrize("command", [["torus", "IMAGE"], ["sphere", "builtin:gaussians"]])
 @pytest.mark.parametrize("count", ["0", "-5"])
-def test_a_count_below_one_is_one_line_before_the_peak_note(image_path, command, count):
-    """The peak note computed its bandwidth from -M before the count was checked: a traceback for -M -5, a numpy
-    warning and 'the bandwidth rises from 0 to 0' for -M 0 (a code review)."""
+@pytest.mark.parametrize("outputs", [["-o", "-"], ["-o", "x.png"], ["--dot-style", "filled", "-o", "x.svg"]])
+def test_a_count_below_one_is_one_line_before_the_peak_note(image_path, command, count, outputs):
+    """-M is checked where it enters: the peak note, the PNG's size and the pen's notes used it first (a traceback
+    for -M -5 with a PNG, numpy warnings and notes before the error for -M 0: two code reviews)."""
     command = [image_path if part == "IMAGE" else part for part in command]
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
-        result = run([*command, "-M", count, "-o", "-"])
+        result = run([*command, "-M", count, *outputs])
     assert result.exit_code == 1 and result.output.strip().splitlines() == [
         f"Error: number of points must be an integer in [1, 20000000], not {count}"
     ], result.output

@@ -8,6 +8,7 @@ SETTLE_WINDOW = 20
 # stipple.halftone
 INITS = ("stratified", "density", "uniform")
 DEFAULT_SETTLE = 2e-3
+MAX_POINTS = 20_000_000
 # stipple.nufft
 BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video

@@ -18,6 +18,7 @@ from .options import (
     without,
 )
 from .supervise import finish, guarded_files, solve, write_outputs
+from .values import checked_count
 
 # The exit code of a run that ended without reaching --error (its points are written).
 NOT_A_DESIGN = 3
@@ -35,6 +36,7 @@ def design_options(function):
             "n_points",
             type=int,
             default=None,
+            callback=checked_count,
             help="Number of points (default: ceil(0.55 (t+1)^2); (t+1)^2 converges in about 50 iterations).",
         ),
         click.option(

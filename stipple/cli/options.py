@@ -8,7 +8,7 @@ from ..errors import MissingInput, StippleError
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
-from .values import FiniteFloatRange, some_output
+from .values import FiniteFloatRange, checked_count, some_output
 
 
 def click_error(error):
@@ -173,6 +173,7 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
             "--points",
             "n_points",
             type=CountOrAuto() if auto_count else int,
+            callback=checked_count,
             default=30000,
             show_default=True,
             help=count_help,

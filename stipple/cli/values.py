@@ -4,6 +4,8 @@ import math
 
 import click
 
+from .defaults import MAX_POINTS
+
 
 class FiniteFloatRange(click.FloatRange):
     """``click.FloatRange`` that also refuses nan and the infinities (its range check lets nan through)."""
@@ -24,3 +26,11 @@ def some_output(ctx, param, outputs):
         if not str(path).strip():
             raise click.BadParameter("an empty file name (an unset shell variable?)", ctx, param)
     return outputs
+
+
+def checked_count(ctx, param, count):
+    """``-M`` checked where it enters, as the library checks it (one line, exit 1): a count below 1 reached the
+    PNG's size (a traceback for -M -5), the pen's notes and the peak note before the run refused it."""
+    if count is None or count == "auto" or 1 <= count <= MAX_POINTS:
+        return count
+    raise click.ClickException(f"number of points must be an integer in [1, {MAX_POINTS}], not {count}")
