@@ -194,7 +194,7 @@ def _check_matches(path, metadata, problem):
         )
     if differ:
         # The option that was changed, before the settings it changes with it (-N follows -M and --length).
-        differ.sort(key=lambda key: FIRST_NAMED.index(key) if key in FIRST_NAMED else len(FIRST_NAMED))
+        differ.sort(key=_naming_order)
         what = SETTING_NAMES.get(differ[0], differ[0])
         if differ[0] in ("points", "shape"):
             what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
@@ -209,17 +209,33 @@ def _check_matches(path, metadata, problem):
         )
 
 
-# What a checkpoint's other settings are on the command line, and the order in which a change is named.
+# What a checkpoint's other settings are on the command line, and the order in which a change is named: the
+# options first, the settings they change after them (FIRST_NAMED, then any other, then LAST_NAMED).
 SETTING_NAMES = {
     "bandwidth": "-N (the bandwidth)",
     "length": "--length (the line's length)",
+    "separation": "--palette",
+    "black": "--black",
     "classes": "--palette or --black (the inks)",
     "class_points": "-M, --palette or --black (the inks' dots)",
     "class_bandwidths": "-N (the inks' bandwidths)",
+    "class_fingerprint": "the image (the inks' densities)",
     "term_weights": "--union-weight",
     "order": "--order progressive",
+    "kernel": "--kernel",
+    "near_field": "--near-field / --no-near-field",
+    "hessian": "--hessian",
 }
-FIRST_NAMED = ["classes", "order", "points", "shape", "length", "term_weights", "class_points", "class_bandwidths"]
+FIRST_NAMED = ["separation", "black", "classes", "order", "points", "shape", "length", "kernel", "near_field"]
+LAST_NAMED = ["term_weights", "class_points", "metric", "class_bandwidths", "bandwidth", "class_fingerprint"]
+
+
+def _naming_order(key):
+    if key in FIRST_NAMED:
+        return FIRST_NAMED.index(key)
+    return len(FIRST_NAMED) + (1 + LAST_NAMED.index(key) if key in LAST_NAMED else 0)
+
+
 COMMANDS = {"torus": "stipple torus or colour", "sphere": "stipple sphere or design", "line": "stipple line"}
 
 
