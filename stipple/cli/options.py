@@ -216,8 +216,9 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
                 type=FiniteFloatRange(min=0),
                 default=None,
                 help=f"Also stop when the last {SETTLE_WINDOW} iterations lowered the energy by less than this "
-                f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus and for sphere maps; 1e-12, a "
-                "stalled run, for uniform points and the Sobolev kernel; else never; README, Defaults).",
+                f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus and for sphere maps, 1.5e-3 "
+                "with --order progressive; 1e-12, a stalled run, for uniform points and sphere runs without the "
+                "near field's distance kernel; else never; README, Defaults).",
             )
         )
     runs = run_options(iterations, PHASED_ITERATIONS) if phased else run_options(iterations)

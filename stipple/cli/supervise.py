@@ -87,7 +87,8 @@ class SignalGuard:
         # process group) is ignored, else it interrupts the interpreter's wait for worker threads with a traceback.
         stopping = self.signal is not None or self.unwinding
         for number, handler in self._previous.items():
-            signal.signal(number, signal.SIG_IGN if stopping else handler)
+            # None: a handler installed outside Python (stipple embedded in a C program), which cannot be put back.
+            signal.signal(number, signal.SIG_IGN if stopping else (signal.SIG_DFL if handler is None else handler))
         self._previous.clear()
 
     def _handle(self, number, frame):
