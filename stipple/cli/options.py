@@ -217,7 +217,7 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
                 default=None,
                 help=f"Also stop when the last {SETTLE_WINDOW} iterations lowered the energy by less than this "
                 f"fraction of it (default: {DEFAULT_SETTLE:g} for one ink on the torus and for sphere maps, 1.5e-3 "
-                "with --order progressive; 1e-12, a stalled run, for uniform points and sphere runs without the "
+                "for a progressive order; 1e-12, a stalled run, for uniform points and sphere runs without the "
                 "near field's distance kernel; else never; README, Defaults).",
             )
         )
