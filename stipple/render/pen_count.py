@@ -76,13 +76,8 @@ class PenCount:
 
     def note(self):
         """A line when the image's darkest tones are beyond the packing's reach, else None."""
-        if self.darkest <= self.reachable:
-            return None
-        beyond, drawn, extreme, tone = INVERTED_WORDS if self.inverted else TONE_WORDS
-        return (
-            f"tones {beyond} than {self.reachable:.0%} will be {drawn}: the pen's dots cannot pack closer without "
-            f"touching (the image's {extreme} 1 % is {self.darkest:.0%} {tone})"
-        )
+        why = "the pen's dots cannot pack closer without touching"
+        return out_of_reach(self.reachable, self.darkest, self.inverted, why)
 
     def details(self):
         """The numbers behind the choice (for ``-v``)."""
@@ -211,6 +206,19 @@ def clipped_density(darkness, allowed, cell_areas=None):
 LIGHT_SHARE = 0.8
 
 
+def out_of_reach(reachable, darkest, inverted, why, advice=""):
+    """The line saying that the image's tones beyond ``reachable`` (the no-touch packing's darkest tone) come out
+    lighter, ``why``, where its ``darkest`` (99th percentile) is beyond it, else None; ``inverted``: light dots
+    on a dark ground, whose darkness is the image's lightness (its lightest tones come out darker)."""
+    if darkest <= reachable:
+        return None
+    beyond, drawn, extreme, tone = INVERTED_WORDS if inverted else TONE_WORDS
+    return (
+        f"tones {beyond} than {reachable:.0%} will be {drawn}: {why} (the image's {extreme} 1 % is {darkest:.0%} "
+        f"{tone}{advice})"
+    )
+
+
 def given_count_notes(darkness, n_points, draw, inverted=False):
     """Lines about a drawing of ``n_points`` dots in a pen or plotter style (``draw``: the render settings): tones
     darker than the no-touch packing reaches come out lighter (as ``-M auto`` says), and a point pen's dots (a
@@ -224,12 +232,11 @@ def given_count_notes(darkness, n_points, draw, inverted=False):
     lines = []
     reachable = reachable_tone(style if style in PEN_STYLES else "filled")
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
-    beyond, drawn, extreme, tone = INVERTED_WORDS if inverted else TONE_WORDS
-    if darkest > reachable:
-        lines.append(
-            f"tones {beyond} than {reachable:.0%} will be {drawn}: the plotter style's dots never touch (the "
-            f"image's {extreme} 1 % is {darkest:.0%} {tone}; the default tone style with discs draws them)"
-        )
+    drawn = (INVERTED_WORDS if inverted else TONE_WORDS)[1]
+    why, advice = "the plotter style's dots never touch", "; the default tone style with discs draws them"
+    line = out_of_reach(reachable, darkest, inverted, why, advice)
+    if line:
+        lines.append(line)
     if style == "point":
         paper_width, pen_width = paper_and_pen(draw)
         paper = paper_area(paper_width, darkness.shape)
