@@ -14,13 +14,11 @@ separate the points themselves (c = 0.55: 0.64) and lattice starts are slow (697
 are the start there.
 """
 
-from dataclasses import replace
-
 import numpy as np
 
 from .errors import StippleError
 from .halftone import MAX_BANDWIDTH, check_integer, run
-from .sphere import STALLED, sphere_problem, unit_vectors
+from .sphere import sphere_problem, unit_vectors
 
 DESIGN_KERNEL = "sobolev:1"
 DESIGN_EPSILON = 1e-12
@@ -30,9 +28,8 @@ TARGET_ERROR = 1e-10
 # CG's relative-gradient stop, far below what the error target needs: a floor for targets the transforms'
 # accuracy cannot reach.
 GRADIENT_FLOOR = 1e-14
-# ... and a run whose energy stops falling (less than this fraction of it over ``SETTLE_WINDOW`` iterations) has
-# stalled: t = 3 with 5 points sat at a relative gradient of 1.4e-14, above the floor, for all 20000 iterations.
-DESIGN_SETTLE = STALLED
+# A run whose energy stops falling has stalled (``stipple.sphere.STALLED``, the settle of every problem without a
+# map): t = 3 with 5 points sat at a relative gradient of 1.4e-14, above the floor, for all 20000 iterations.
 # Start on the jittered Fibonacci lattice from this many points per harmonic on; i.i.d. uniform below.
 LATTICE_FROM = 0.65
 LATTICE_JITTER = 0.1
@@ -119,10 +116,9 @@ def design_problem(strength, n_points=None, *, threads=None, epsilon=DESIGN_EPSI
             f"number of points must be at least (t+1)^2/4, rounded up: {fewest} for strength {strength} "
             f"(designs need about (t+1)^2/2 points), not {n_points}"
         )
-    problem = sphere_problem(
+    return sphere_problem(
         None, n_points, strength, kernel=DESIGN_KERNEL, threads=threads, epsilon=epsilon, near_field=False
     )
-    return replace(problem, settle=DESIGN_SETTLE)
 
 
 def spherical_design(
