@@ -95,8 +95,7 @@ def sphere(ctx, map_source, **options):
             )
             warn_aspect(density, map_source, options)
             density = sphere_pen_density(density, options["n_points"], settings, options["projection"])
-            # A narrow peak took minutes, without a word (a held-out review); a count below 1 is refused below.
-            if options["bandwidth"] is None and options["n_points"] >= 1:
+            if options["bandwidth"] is None:  # a narrow peak took minutes, without a word (a held-out review)
                 even, peaked = default_bandwidth(options["n_points"]), default_bandwidth(options["n_points"], density)
                 peak_note(even, peaked, options, "map's densest part", "a narrow peak, lights at night")
             problem = sphere_problem(

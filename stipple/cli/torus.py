@@ -121,8 +121,8 @@ def peak_hint(weights, options):
     photo, without a word (a held-out review)."""
     import numpy as np
 
-    count = options["n_points"]  # "auto", or not yet checked: -M 0 and -M -5 are refused by the run itself
-    if options["quiet"] or options["bandwidth"] is not None or not isinstance(count, int) or count < 1:
+    count = options["n_points"]  # checked where it entered (``checked_count``), or "auto"
+    if options["quiet"] or options["bandwidth"] is not None or count == "auto":
         return
     if np.any(weights > 0):  # a blank image is refused by the run itself (its peak ratio divides by zero)
         from ..pipelines.pen import placement_density
