@@ -12,7 +12,7 @@ import time
 import click
 
 from ..errors import StippleError
-from ..io.commit import FORMATS, STOP_SIGNALS, check_writable, commit_outputs, output_format
+from ..io.commit import FORMATS, check_writable, commit_outputs, output_format, taken_signals
 from ..io.safety import CheckpointLock, check_distinct
 
 
@@ -57,7 +57,7 @@ class Interrupted(BaseException):
 
 
 class SignalGuard:
-    """SIGINT / SIGTERM / SIGHUP (``STOP_SIGNALS``) for the whole command.
+    """SIGINT / SIGTERM / SIGHUP (``taken_signals``) for the whole command.
 
     While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
     iteration, so that the checkpoint and the outputs reached so far are written; any other signal
@@ -73,10 +73,8 @@ class SignalGuard:
 
     def __enter__(self):
         self.signal, self.deferring, self.unwinding = None, False, False
-        for number in STOP_SIGNALS:
+        for number in taken_signals():
             try:
-                if signal.getsignal(number) is signal.SIG_IGN:  # nohup's SIGHUP, a script's background job's SIGINT
-                    continue
                 self._previous[number] = signal.signal(number, self._handle)
             except ValueError:  # not the main thread: leave signals alone
                 break

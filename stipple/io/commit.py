@@ -277,9 +277,15 @@ def _remove(path):
 STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
+def taken_signals():
+    """The ``STOP_SIGNALS`` a command takes over: those its caller has not set to be ignored (``nohup``'s SIGHUP,
+    a script's background job's SIGINT stay ignored)."""
+    return [number for number in STOP_SIGNALS if signal.getsignal(number) is not signal.SIG_IGN]
+
+
 @contextlib.contextmanager
 def _signals_held():
-    """``STOP_SIGNALS`` received in the block are delivered after it (main thread only; else a no-op).
+    """``taken_signals`` received in the block are delivered after it (main thread only; else a no-op).
 
     The Python-level handlers are swapped for a recorder, which works whichever thread the kernel
     picks for the signal; recorded signals are raised again once the previous handlers are back.
@@ -287,9 +293,8 @@ def _signals_held():
     caught = []
     previous = {}
     try:
-        for number in STOP_SIGNALS:
-            if signal.getsignal(number) is not signal.SIG_IGN:  # ignored by the caller (nohup): left so
-                previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
+        for number in taken_signals():
+            previous[number] = signal.signal(number, lambda number, frame: caught.append(number))
     except ValueError:  # not the main thread: signals cannot be handled here anyway
         pass
     try:
