@@ -12,10 +12,12 @@ tail -3 "$OUT/pytest.log"
 # -P: not the working directory (this checkout) first on the path, so the old package is the one imported.
 OLD="env PYTHONPATH=${S}:$R/.gpu/old $PY -P -m stipple"
 mkdir -p /tmp/paired && cp -r .gpu/inputs /tmp/paired/
+# A case is NAME:REPEATS, or NAME:REPEATS:new for the new version alone (its old run timed in another call).
 for spec in ${CASES:-million:1 portrait:2}; do
-  name=${spec%%:*}; repeats=${spec##*:}
+  IFS=: read -r name repeats which <<< "$spec"
+  old=(--old "$OLD"); [ "${which:-}" = new ] && old=()
   log "paired $name"
-  timeout ${T_PAIRED:-330} $PY bench/paired.py --old "$OLD" --new "$PY -m stipple" --variant "gpu=--backend cufinufft" \
+  timeout ${T_PAIRED:-330} $PY bench/paired.py "${old[@]}" --new "$PY -m stipple" --variant "gpu=--backend cufinufft" \
     --cases "$name" --repeats "$repeats" --out /tmp/paired --output "$OUT/paired-$name.json" 2>&1 | tee -a "$OUT/paired.log"
 done
 
