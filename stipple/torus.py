@@ -248,10 +248,11 @@ def torus_problem(
         correction_bandwidth = default_bandwidth(n_points, weights)
         bandwidth = even_at_least_2(correction_bandwidth * check_bandwidth_factor(bandwidth_factor))
     bandwidth = check_bandwidth(bandwidth)
-    check_memory(GRIDS * 16 * 1.6 * (bandwidth + 1) ** 2 + POINT_BYTES * n_points, f"M={n_points}, N={bandwidth}")
+    threads = default_threads() if threads is None else check_threads(threads)
+    point_bytes = POINT_BYTES + THREAD_POINT_BYTES * threads
+    check_memory(GRIDS * 16 * 1.6 * (bandwidth + 1) ** 2 + point_bytes * n_points, f"M={n_points}, N={bandwidth}")
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    threads = default_threads() if threads is None else check_threads(threads)
     epsilon = check_epsilon(epsilon)
     derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon)
     scale = torus_scale(weights.shape)
@@ -300,12 +301,15 @@ def torus_problem(
     )
 
 
-# A run's memory (``torus_problem``'s check): GRIDS complex mode grids, oversampled, and POINT_BYTES a point. Whole
-# default commands peaked at 2.50 GiB for 10^6 points at N = 2620 (estimated 2.40), 2.19 GB for a small dark spot
-# on a white page, 10^4 points at N = 3120 (2.25). Twelve grids and 320 bytes a point estimated 20 million points on
-# a 48 x 32 image at 15.4 GiB, which passed on a machine with 22.8 GiB available, and the kernel's OOM killer ended
-# the run at 23.5 GB; now 25.7 GiB, refused.
-GRIDS, POINT_BYTES = 9, 1000
+# A run's memory (``torus_problem``'s check): GRIDS complex mode grids, oversampled, and POINT_BYTES a point, with
+# THREAD_POINT_BYTES more for each thread (each residue class of the type-1 transforms keeps the points' phases
+# and its plan's copy of them). Whole default commands with 2 threads peaked at 2.50 GiB for 10^6 points at
+# N = 2620 (estimated 2.41), 2.19 GB for a small dark spot on a white page, 10^4 points at N = 3120 (2.25); with
+# 16 threads 10^6 points peaked at 3.45 GiB (estimated 3.46; a 16-core machine), and M = 200000 at 0.72 GiB
+# against 0.60 with 2 (`--threads 16` on 2 cores).
+# Twelve grids and 320 bytes a point estimated 20 million points on a 48 x 32 image at 15.4 GiB, which passed on a
+# machine with 22.8 GiB available, and the kernel's OOM killer ended the run at 23.5 GB; now 25.7 GiB, refused.
+GRIDS, POINT_BYTES, THREAD_POINT_BYTES = 9, 850, 80
 
 
 def pair_share(threads):

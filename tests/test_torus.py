@@ -224,18 +224,26 @@ class _PastTheMemoryCheck(Exception):
     pass
 
 
-@pytest.mark.parametrize("shape, count, refused", [((32, 48), 20_000_000, True), ((1024, 1024), 1_000_000, False)])
-def test_the_memory_check_counts_what_a_point_costs(monkeypatch, shape, count, refused):
+@pytest.mark.parametrize(
+    "shape, count, threads, available, refused",
+    [
+        ((32, 48), 20_000_000, 2, 22.8, True),
+        ((1024, 1024), 1_000_000, 2, 2.6, False),
+        ((1024, 1024), 1_000_000, 16, 3.0, True),
+    ],
+)
+def test_the_memory_check_counts_what_a_point_costs(monkeypatch, shape, count, threads, available, refused):
     """20 million points on a 48 x 32 image were estimated at 15.4 GiB (320 bytes a point), passed on a machine
     with 22.8 GiB available, and were killed by the kernel at 23.5 GB; the default million-dot run, which peaks at
-    2.50 GiB, still passes with 2.6 GiB available."""
+    2.50 GiB with 2 threads, still passes with 2.6 GiB available. With 16 threads it peaked at 3.45 GiB (a lent
+    16-core machine), which 3 GiB must not let through."""
     import stipple.allocator
     import stipple.torus
 
     def past(*args):
         raise _PastTheMemoryCheck
 
-    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: (22.8 if refused else 2.6) * 2**30)
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: available * 2**30)
     monkeypatch.setattr(stipple.torus, "make_nufft", past)
     with pytest.raises(StippleError if refused else _PastTheMemoryCheck):
-        torus_problem(np.full(shape, 0.5), count)
+        torus_problem(np.full(shape, 0.5), count, threads=threads)
