@@ -310,7 +310,7 @@ def made(tmp_path_factory):
     [
         (["d.svg", "--sigma", "2"], "--sigma: not for a DRAWING.svg's plot estimate"),
         (["d.svg", "--gamma", "2", "--speed", "3"], "--gamma: not for a DRAWING.svg's plot estimate"),
-        (["p.png", "g.png", "--speed", "2"], "--speed: not for a drawn PICTURE.png"),
+        (["p.png", "g.png", "--speed", "2"], "--speed: not for a drawn PICTURE"),
         (["cp.png", "c.png", "--gamma", "2"], "--gamma: for gray measures; a colour picture"),
         (["cp.png", "c.png", "--invert"], "--invert: for gray measures; a colour picture"),
         (["p.csv", "g.png", "--lift", "1"], "--lift: not for points"),

@@ -293,9 +293,9 @@ def test_rows11_12_invert_and_levels_auto_are_named(tmp_path):
     "args, message",
     [
         (["builtin:nosuch"], "unknown builtin 'nosuch': choose from builtin:gaussians"),
-        (["{image}", "--floyd-steinberg", "100"], "--floyd-steinberg: for a drawn PICTURE.png"),
-        (["{image}", "--sigma", "2"], "--sigma: for a drawn PICTURE.png"),
-        (["{image}", "--inset", "2"], "--inset: for a drawn PICTURE.png"),
+        (["{image}", "--floyd-steinberg", "100"], "--floyd-steinberg: for a drawn PICTURE"),
+        (["{image}", "--sigma", "2"], "--sigma: for a drawn PICTURE"),
+        (["{image}", "--inset", "2"], "--inset: for a drawn PICTURE"),
     ],
 )
 def test_rows15_16_evaluate_refuses_what_does_not_apply(dots, grad64, args, message):
@@ -423,7 +423,7 @@ def test_options_that_empty_the_image_or_draw_for_minutes_are_named(tmp_path):
         (["torus", "{colour}", "--palette", "cmy", "--black", "0.3"], "--black is for --palette cmyk"),
         (["colour", "{colour}", "--palette", "gray", "--black", "0.3"], "--black is for --palette cmyk"),
         (["evaluate", "{dots}", "{gray}", "--black", "0.3"], "are for layered CSVs"),
-        (["evaluate", "{picture}", "{gray}", "--palette", "cmy"], "not for a drawn PICTURE.png"),
+        (["evaluate", "{picture}", "{gray}", "--palette", "cmy"], "not for a drawn PICTURE"),
     ],
 )
 def test_options_that_would_be_ignored_are_refused(grad, tmp_path, args, message):

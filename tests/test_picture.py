@@ -219,6 +219,21 @@ def test_evaluate_measures_the_default_png_of_a_long_strip(tmp_path, shape):
     assert json.loads(report.output)["drawn_shape"] == [drawn.height, 1024]
 
 
+@pytest.mark.parametrize("suffix", [".bmp", ".tif", ".gif", ".JPG"])
+def test_a_picture_in_another_raster_format_measures_as_its_png(tmp_path, suffix):
+    """A .bmp, .tif or .gif picture was read as a CSV of points ('expected a CSV with header x,y'); a JPEG's
+    compression changes its measures a little."""
+    source = save(tmp_path / "in.png", ramp())
+    drawn = np.kron(ramp(), np.ones((3, 3))) - 0.04
+    reports = [
+        json.loads(evaluate(save(tmp_path / name, drawn), source, "--json", "-").output)
+        for name in ("p.png", "p" + suffix)
+    ]
+    assert reports[1]["measures"] == "gray" and reports[1]["drawn_shape"] == [144, 192]
+    tolerance = 0.002 if suffix == ".JPG" else 1e-9
+    assert reports[1]["stipple"][0]["rmse"] == pytest.approx(reports[0]["stipple"][0]["rmse"], abs=tolerance)
+
+
 @pytest.mark.parametrize(
     "make, message",
     [

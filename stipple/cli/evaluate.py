@@ -2,11 +2,13 @@
 spectrum plot)."""
 
 import json
+import os
 
 import click
 
 from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
+from ..io.sources import PICTURE_EXTENSIONS
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
 from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
 from .supervise import guarded_files
@@ -87,8 +89,9 @@ def evaluate(
     **plotter,
 ):
     """Measure how well POINTS (a stipple CSV) reproduce INPUT (image, map, builtin:NAME, or --uniform); layered
-    CSVs per ink and for all dots together. Given a drawn PICTURE.png instead of POINTS: its picture measures
-    against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and chroma).
+    CSVs per ink and for all dots together. Given a drawn PICTURE (PNG, JPEG, TIFF, ...) instead of POINTS: its
+    measures against INPUT, both blurred at viewing distance (luminance RMSE and tone curve, or CIEDE2000 and
+    chroma).
     Given a DRAWING.svg (stipple's or vpype's): the plot's estimate per pen (paths, pen-down length, pen-up
     travel, lifts, time; docs/plotters.md)."""
     from ..measures.reports import evaluation_report
@@ -102,7 +105,7 @@ def evaluate(
         "palette": palette,
         "black": black,
     }
-    kind = {".svg": "drawing", ".png": "picture"}.get(str(points_source).lower()[-4:], "points")
+    kind = source_kind(points_source)
     refuse_foreign_options(kind)
     if kind == "drawing":
         evaluate_plot(points_source, input_source, json_path, plotter)
@@ -110,9 +113,7 @@ def evaluate(
     separation_given = palette != "cmyk" or black != 1.0
     if kind == "picture":
         if separation_given:
-            raise click.ClickException(
-                "--palette and --black are for layered CSVs (points), not for a drawn PICTURE.png"
-            )
+            raise click.ClickException("--palette and --black are for layered CSVs (points), not for a drawn PICTURE")
         picture = {"sigmas": sigmas, "colour": colour, "levels": levels, "inset": inset, "fs_dots": fs_dots}
         evaluate_picture(
             points_source, input_source, json_path, picture, options, spectrum_path or bandwidth or as_line
@@ -184,7 +185,14 @@ APPLIES = {
         "as_line",
     },
 }
-KINDS = {"drawing": "a DRAWING.svg's plot estimate", "picture": "a drawn PICTURE.png", "points": "points"}
+KINDS = {"drawing": "a DRAWING.svg's plot estimate", "picture": "a drawn PICTURE", "points": "points"}
+
+
+def source_kind(points_source):
+    """What ``stipple evaluate`` measures in ``points_source``: a plotter's drawing (SVG), a drawn picture (a raster
+    image), or points (a CSV, or stdin)."""
+    suffix = os.path.splitext(str(points_source).lower())[1]
+    return "drawing" if suffix == ".svg" else "picture" if suffix in PICTURE_EXTENSIONS else "points"
 
 
 def refuse_foreign_options(kind):
@@ -279,11 +287,11 @@ def check_picture_options_absent(sigmas, colour, inset, fs_dots):
     }
     named = [name for name, present in given.items() if present]
     if named:
-        raise StippleError(f"{', '.join(named)}: for a drawn PICTURE.png, not for points")
+        raise StippleError(f"{', '.join(named)}: for a drawn PICTURE, not for points")
 
 
 def evaluate_picture(picture_source, input_source, json_path, picture, options, point_only):
-    """``stipple evaluate PICTURE.png INPUT``: the picture measures as text, or JSON with ``--json``."""
+    """``stipple evaluate PICTURE INPUT``: the picture measures as text, or JSON with ``--json``."""
     from ..measures.picture import SIGMAS
     from ..measures.reports import format_picture_report, picture_report
 

@@ -8,6 +8,8 @@ import sys
 from ..errors import StippleError
 
 MAX_INPUT_BYTES = 1 << 30
+# The raster formats a drawn picture may come as (``stipple evaluate PICTURE INPUT``): Pillow reads them all.
+PICTURE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".gif", ".webp")
 # How messages name standard input.
 STDIN_NAME = "<stdin>"
 # The last standard input read and its bytes: a command may read its input twice (a colour run's inks, then its
