@@ -41,6 +41,16 @@ def test_one_output_may_be_given_as_a_string(setup):
     assert len((setup / "dots.csv").read_text().splitlines()) == 41
 
 
+def test_a_byte_order_mark_is_skipped(setup):
+    """A config saved with a UTF-8 byte-order mark (Notepad's 'UTF-8 with BOM') was 'not valid TOML'."""
+    text = 'input = "inputs/ramp.png"\npoints = 40\niterations = 3\nquiet = true\noutput = "dots.csv"\n'
+    config = setup / "job.toml"
+    config.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    result = run(["torus", "--config", config])
+    assert result.exit_code == 0, result.output
+    assert len((setup / "dots.csv").read_text().splitlines()) == 41
+
+
 def test_command_line_overrides_config(setup):
     config = write_config(
         setup / "job.toml", 'input = "inputs/ramp.png"\npoints = 40\nbandwidth = 12\niterations = 3\nquiet = true\n'

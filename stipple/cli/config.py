@@ -46,7 +46,8 @@ def load_config(ctx, param, value):
 
 
 def _read_table(path, ctx, param):
-    """The TOML table of ``path`` (UTF-8, at most ``MAX_CONFIG_BYTES``)."""
+    """The TOML table of ``path`` (UTF-8, at most ``MAX_CONFIG_BYTES``; a byte-order mark, as some editors on
+    Windows write, is skipped)."""
     try:
         with open(path, "rb") as stream:
             data = stream.read(MAX_CONFIG_BYTES + 1)
@@ -55,7 +56,7 @@ def _read_table(path, ctx, param):
     if len(data) > MAX_CONFIG_BYTES:
         raise click.BadParameter(f"{path} is longer than {MAX_CONFIG_BYTES} bytes; not a config file", ctx, param)
     try:
-        return tomllib.loads(data.decode("utf-8"))
+        return tomllib.loads(data.decode("utf-8-sig"))
     except UnicodeDecodeError:
         raise click.BadParameter(f"{path} is not UTF-8 text", ctx, param) from None
     except (tomllib.TOMLDecodeError, RecursionError) as error:
