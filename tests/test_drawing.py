@@ -275,6 +275,22 @@ def test_a_pen_too_wide_for_the_globe_is_refused_in_one_line():
         pen_sphere_drawing(10, "ortho", "point", 90.0)
 
 
+@pytest.mark.parametrize("stroke", [0.9, 1.3397, 2.15])
+@pytest.mark.parametrize("pixels_wide", [240, 413])
+def test_a_line_inks_the_area_of_its_stroke_at_any_width(stroke, pixels_wide):
+    """A closed square of side 40 (turned 0.3 rad: no edge along the pixels) stroked ``stroke`` wide with round
+    joins inks ``4 s w - (4 - pi) w^2 / 4``, the SVG's area, at any PNG width; the discs along it are short by
+    less than 0.5 %. Pillow's lines, their width rounded to a quarter pixel, were off by -3.7 to +0.1 % here, and
+    ``stipple line``'s tone-true stroke laid down 4-7 % too much ink (a held-out review)."""
+    from stipple.io.png import render_line
+
+    side, size = 40.0, (60, 60)
+    corners = 30 + 30j + (np.array([-1 - 1j, 1 - 1j, 1 + 1j, -1 + 1j]) * side / 2) * np.exp(0.3j)
+    picture = render_line(np.column_stack([corners.real, corners.imag]), size, pixels_wide, stroke)
+    drawn = (1 - np.asarray(picture, dtype=float) / 255).mean() * size[0] * size[1]
+    assert drawn == pytest.approx(4 * side * stroke - (4 - np.pi) * stroke**2 / 4, rel=0.006)
+
+
 def test_the_tone_stroke_inks_the_mean_darkness_where_the_line_crosses_itself():
     """``ink W H / length`` alone ignores the ink that crossings and touching strokes share: a wandering closed
     line of 4000 vertices drawn for 0.4 of a 120 x 80 image laid down 0.31; the stroke corrected by the drawn

@@ -121,16 +121,20 @@ def render_line(pixels, size, pixels_wide, pen_width, closed=True, colour=BLACK,
     (grayscale when both are grays).
 
     ``pixels`` are the vertices in user units of a canvas of ``size = (width, height)``; drawn at 4× and reduced.
+    The stroke is the union of discs along the line (``stroke_centres``), as pen paths are drawn: Pillow's lines,
+    their width rounded to a quarter pixel, made ``stipple line``'s tone-true stroke lay down 4-7 % too much ink
+    (a held-out ramp: 0.524 for 0.500), the calibration of ``tone_stroke`` landing on one of the rounding's steps.
     """
     channels = 1 if len(set(colour)) == 1 and len(set(background)) == 1 else 3
     paper, ink = _pixel_value(background, channels), _pixel_value(colour, channels)
     scale, canvas_size = png_canvas(size, pixels_wide)
     canvas = Image.new("L" if channels == 1 else "RGB", canvas_size, paper)
-    vertices = np.asarray(pixels) * scale
-    if closed:
-        vertices = np.vstack([vertices, vertices[:1]])
-    stroke = max(int(round(pen_width * scale[0])), 1)
-    ImageDraw.Draw(canvas).line([tuple(v) for v in vertices], fill=ink, width=stroke, joint="curve")
+    vertices = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+    path = vertices[:, 0] + 1j * vertices[:, 1]
+    if closed and len(path) > 1:
+        path = np.append(path, path[:1])
+    centres = stroke_centres([path], pen_width)
+    canvas.paste(ink, mask=_disc_mask(centres, np.full(len(centres), pen_width / 2), scale, canvas.size))
     return canvas.reduce(SUPERSAMPLE)
 
 
