@@ -38,7 +38,8 @@ def test_line_writes_one_closed_path_as_csv_svg_png(ramp_path, tmp_path):
     assert svg.count("<path") == 1 and svg.count(" Z") == 1 and 'fill="none"' in svg
     path = re.search(r'd="M ([^"]*) Z"', svg).group(1)
     vertices = np.array([[float(v) for v in pair.split(",")] for pair in path.split()])
-    np.testing.assert_allclose(vertices, table, atol=2e-3)
+    # Drawn at least half the stroke from the page's edges (no stroke past the page), elsewhere where they are.
+    np.testing.assert_allclose(vertices, np.clip(table, 0.06, [48 - 0.06, 32 - 0.06]), atol=2e-3)
     assert 'stroke-width="0.1200"' in svg  # 0.5 mm of a 200 mm wide drawing of 48 px
     picture = np.asarray(Image.open(outputs[2]))
     assert picture.shape == (128, 192) and picture.min() < 128 and picture.max() == 255
@@ -198,3 +199,23 @@ def test_a_checkpoint_with_a_bad_penalty_is_refused_in_one_line(ramp_path, tmp_p
     result = run([*args, "--resume"])
     assert result.exit_code == 1 and "corrupt checkpoint metadata (penalty" in result.output, result.output
     assert "Traceback" not in result.output
+
+
+@pytest.mark.parametrize("pen_width", [(0.5, "mm"), None])
+def test_no_stroke_inks_past_the_page(pen_width):
+    """The run's vertices rest on the image's edges, and the SVG drew their strokes up to half a stroke past the
+    page (a plotter draws there; a held-out review). Vertices nearer an edge than half the stroke are drawn that
+    far from it; the others where they are."""
+    from stipple.render.flat import line_drawing
+
+    rng = np.random.default_rng(3)
+    points = np.concatenate([rng.random((200, 2)), [[0.0, 0.0], [1.0, 0.5], [0.3, 1.0], [0.0, 0.7]]])
+    shape = (48, 64)
+    drawing = line_drawing(points, shape, width=(64.0, "mm"), pen_width=pen_width, ink=0.3)
+    half = drawing.stroke / 2
+    assert half > 0.05
+    assert drawing.line.min() >= half - 1e-12
+    assert np.all(drawing.line <= np.array([64, 48]) - half + 1e-12)
+    pixels = points * [64, 48]
+    inside = np.all((pixels > half) & (pixels < np.array([64, 48]) - half), axis=1)
+    assert inside.sum() > 150 and np.array_equal(drawing.line[inside], pixels[inside])

@@ -5,7 +5,15 @@ import numpy as np
 
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
-from .dots import flat_dots, home_positions, ink_radius, left_out_note, pen_extent, squash_paths, tone_dots
+from .dots import (
+    flat_dots,
+    home_positions,
+    ink_radius,
+    left_out_note,
+    pen_extent,
+    squash_paths,
+    tone_dots,
+)
 from .drawing import Drawing
 from .pen import closed_length, dot_paths
 
@@ -110,23 +118,40 @@ def line_drawing(
     closed path of physical ``width`` stroked ``pen_width`` (physical ``(value, unit)``) in ``color`` on
     ``background`` (``--invert``: white on black), ``png_width`` pixels wide as a PNG (default:
     ``line_png_width``). Without ``pen_width`` the stroke is ``tone_stroke`` for ``ink``, the density's mean (one
-    input pixel without it)."""
+    input pixel without it). Vertices closer to an edge than half the stroke are drawn that far from it
+    (``within``), so that no stroke inks past the page: the run's vertices rest on the image's edges, and a
+    plotter drew up to half a stroke beyond them."""
     rows, columns = shape
+    size = (columns, rows)
     pixels = np.asarray(points) * np.array([columns, rows])
     if pen_width is not None:
-        stroke = to_user_units(pen_width, width, columns)
+        stroke = margin = to_user_units(pen_width, width, columns)
+    elif ink is None:
+        stroke = margin = 1.0
     else:
-        stroke = 1.0 if ink is None else tone_stroke(pixels, shape, ink)
+        # The tone stroke of the line as drawn, kept half the stroke first found for it from the edges.
+        first = tone_stroke(pixels, shape, ink)
+        stroke = tone_stroke(within(pixels, size, first / 2), shape, ink)
+        margin = max(first, stroke)
     return Drawing(
-        (columns, rows),
+        size,
         width,
         line_png_width(png_width, shape),
         notes=(f"one closed line, {len(pixels)} vertices, stroke {stroke:.3g} px",),
         background=tuple(background),
-        line=pixels,
+        line=within(pixels, size, margin / 2),
         stroke=stroke,
         line_colour=tuple(color),
     )
+
+
+def within(pixels, size, margin):
+    """``pixels`` moved to at least ``margin`` from the edges of a ``size = (width, height)`` canvas (at most to
+    its middle): an affine inset as the dots' (``inset``) moved a ramp's whole top row of strokes off it, 0.40 of
+    ink drawn 0.10."""
+    extent = np.asarray(size, dtype=np.float64)
+    margin = np.minimum(margin, extent / 2)
+    return np.clip(pixels, margin, extent - margin)
 
 
 def tone_stroke(pixels, shape, ink, passes=STROKE_PASSES):
