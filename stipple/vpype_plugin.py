@@ -167,18 +167,21 @@ def plugin_count(text, image, width, pen_width, options):
     return count.n_points
 
 
-def line_path(image, n_vertices, *, width, length=None, invert=False, **options):
-    """The closed line through ``image`` as complex vertices in CSS pixels (closed: the first repeated last), and
-    the page height; ``options`` go to ``stipple.line.draw_line``."""
+def line_path(image, n_vertices, *, width, pen_width=0.0, length=None, invert=False, **options):
+    """The closed line through ``image`` as complex vertices in CSS pixels (closed: the first repeated last), at
+    least half of ``pen_width`` from the page's edges as ``stipple line`` draws it (``within``), and the page
+    height; ``options`` go to ``stipple.line.draw_line``."""
     from .io.images import load_density
     from .line import draw_line, line_points
+    from .render.flat import within
 
     weights = load_density(image, invert=invert)
     rows, columns = weights.shape
+    height = rows * width / columns
     result = draw_line(weights, n_vertices, length, **options)
-    pixels = line_points(result.points) * np.array([columns, rows]) * (width / columns)
+    pixels = within(line_points(result.points) * np.array([width, height]), (width, height), pen_width / 2)
     path = pixels[:, 0] + 1j * pixels[:, 1]
-    return np.append(path, path[:1]), rows * width / columns
+    return np.append(path, path[:1]), height
 
 
 @click.command("stippleline")
@@ -195,7 +198,7 @@ def stippleline(document, image, n_vertices, width, pen_width, **options):
     """Draw IMAGE as one closed line in one new layer (the image's top-left corner at the origin)."""
     try:
         check_lengths(width=width, pen_width=pen_width, seed=options["seed"])
-        path, height = line_path(image, n_vertices, width=width, **options)
+        path, height = line_path(image, n_vertices, width=width, pen_width=pen_width, **options)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     layer_id = document.free_id()

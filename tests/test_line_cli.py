@@ -157,8 +157,9 @@ def test_vpype_stippleline_adds_one_closed_line_in_page_units(ramp_path):
     assert layer.property(vpype.METADATA_FIELD_PEN_WIDTH) == pytest.approx(0.5 * millimetre)
     assert document.page_size == pytest.approx((96 * millimetre, 64 * millimetre))
     assert len(path) == 301 and path[0] == path[-1]
-    assert path.real.min() >= 0 and path.real.max() <= 96 * millimetre
-    assert path.imag.min() >= 0 and path.imag.max() <= 64 * millimetre
+    half = 0.25 * millimetre  # no stroke past the page
+    assert path.real.min() >= half and path.real.max() <= 96 * millimetre - half
+    assert path.imag.min() >= half and path.imag.max() <= 64 * millimetre - half
     segments = np.abs(np.diff(path))
     assert segments.max() <= 1.05 * segments.mean()
     assert np.sum(path.real < 48 * millimetre) > 2 * np.sum(path.real >= 48 * millimetre)  # dark on the left
@@ -219,3 +220,19 @@ def test_no_stroke_inks_past_the_page(pen_width):
     pixels = points * [64, 48]
     inside = np.all((pixels > half) & (pixels < np.array([64, 48]) - half), axis=1)
     assert inside.sum() > 150 and np.array_equal(drawing.line[inside], pixels[inside])
+
+
+def test_vpype_stippleline_keeps_the_pen_on_the_page(ramp_path, monkeypatch):
+    """A vertex on the image's edge is drawn half the pen from it, as ``stipple line`` draws it."""
+    pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import types
+
+    import stipple.line
+    from stipple.vpype_plugin import line_path
+
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 0.5]])
+    monkeypatch.setattr(stipple.line, "draw_line", lambda *args, **options: types.SimpleNamespace(points=corners))
+    monkeypatch.setattr(stipple.line, "line_points", lambda points: points)
+    path, height = line_path(ramp_path, 4, width=96.0, pen_width=2.0)
+    assert height == pytest.approx(64.0)
+    np.testing.assert_allclose(path, [1 + 1j, 95 + 1j, 95 + 63j, 48 + 32j, 1 + 1j])
