@@ -130,7 +130,7 @@ def test_decompression_bomb(files, monkeypatch):
         (["--threads", "0"], "threads must be an integer"),
         (["--epsilon", "1e-20"], "epsilon must be a number"),
         (["--checkpoint-every", "soon"], "checkpoint-every must be like"),
-        (["--dot-radius", "-1mm"], "dot-radius must be a number with a unit"),
+        (["--dot-radius", "-1mm"], "dot-radius must be a length (mm"),
     ],
 )
 def test_bad_numbers(files, option, message):

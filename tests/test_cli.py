@@ -87,7 +87,7 @@ def test_an_init_made_for_another_image_is_warned_about(image_path, tmp_path):
         (["-N", -4], "bandwidth must be an even integer"),
         (["-o", "dots.xyz"], "unknown output format .xyz"),
         (["-o", "/nonexistent-dir/dots.csv"], "does not exist"),
-        (["--width", "wide"], "width must be a number with a unit"),
+        (["--width", "wide"], "width must be a length (mm"),
         (["--gamma", 0], "gamma must be a positive number"),
         (["--tol", -1], "tol must be a positive number"),
         (["--settle", 1], "settle must be a number in [0, 1)"),

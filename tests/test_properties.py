@@ -74,7 +74,7 @@ def test_parse_length(text):
 
 
 @FAST
-@given(st.floats(1e-3, 1e4), st.sampled_from(["mm", "cm", "in", "px", ""]))
+@given(st.floats(1e-2, 1e4), st.sampled_from(["mm", "cm", "in", "pt", "px", ""]))
 def test_parse_length_round_trip(value, unit):
     parsed = parse_length(f"{value!r}{unit}")
     assert parsed == (value, unit or "mm")
@@ -116,3 +116,9 @@ def test_extreme_values_rescale_without_overflow():
     np.save(buffer, np.array([[-1.7e308, 0.0], [1.7e308, 1.0]]))
     density = load_density(bytes_source(buffer.getvalue()))
     np.testing.assert_allclose(density, [[0, 0.5], [1, 0.5]])
+
+
+def test_a_pen_in_points_is_a_72nd_of_an_inch():
+    """Pen widths are often given in points (a 0.7 pt liner); ``pt`` was refused."""
+    assert parse_length("0.7pt") == (0.7, "pt")
+    assert abs(72 * UNITS["pt"] - UNITS["in"]) < 1e-12

@@ -53,9 +53,9 @@ def load_density_of(image):
 
 
 NUMBERS = {
-    "--width 1e309mm": (["--width", "1e309mm", "-o", "x.svg"], "width must be a number with a unit"),
+    "--width 1e309mm": (["--width", "1e309mm", "-o", "x.svg"], "width must be a length (mm"),
     "--width 1e-9mm": (["--width", "1e-9mm", "-o", "x.svg"], "from 0.001mm to 1e+06mm"),
-    "--dot-radius 1e309": (["--dot-radius", "1e309", "-o", "x.svg"], "dot-radius must be a number with a unit"),
+    "--dot-radius 1e309": (["--dot-radius", "1e309", "-o", "x.svg"], "dot-radius must be a length (mm"),
     "--dot-radius 2e6mm": (["--dot-radius", "2e6mm", "-o", "x.svg"], "from 0.001mm to 1e+06mm"),
     "--epsilon 0": (["--epsilon", "0"], "epsilon must be a number in [1e-14, 1e-2], not 0.0"),
     "--range nan 1": (["--range", "nan", "1"], "range must be two finite numbers LO HI with LO < HI"),

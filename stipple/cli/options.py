@@ -96,7 +96,7 @@ def output_options():
             callback=some_output,
             help="Output (.csv .svg .png; sphere also .geojson); repeatable; '-' is CSV on stdout.",
         ),
-        click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px)."),
+        click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, pt, px)."),
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
         click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
         click.option(

@@ -28,7 +28,7 @@ from .values import FiniteFloatRange, some_output
     help="Torus: the input image, for its size and the tone the dots draw (without it: plotter-style dots, 50 % ink).",
 )
 @click.option("--size", default=None, help="Torus: WIDTH,HEIGHT of the input in pixels (default: from the points).")
-@click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, px).")
+@click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, pt, px).")
 @click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm.")
 @click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels.")
 @click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters).")

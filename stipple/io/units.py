@@ -6,18 +6,18 @@ from PIL import ImageColor
 
 from ..errors import StippleError
 
-UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "px": 25.4 / 96}
+UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
 MIN_LENGTH_MM = 1e-3
 MAX_LENGTH_MM = 1e6
 
 
 def parse_length(text, name="length"):
-    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"800px"`` or a bare number (mm) -> (value, unit).
+    """``"200mm"``, ``"8in"``, ``"20 cm"``, ``"0.7pt"``, ``"800px"`` or a bare number (mm) -> (value, unit).
 
     The length must lie between ``MIN_LENGTH_MM`` (1 µm) and ``MAX_LENGTH_MM`` (1 km).
     """
-    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|in|px)?\s*", str(text))
-    allowed = f"a number with a unit (mm, cm, in, px) from {MIN_LENGTH_MM:g}mm to {MAX_LENGTH_MM:g}mm"
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|in|pt|px)?\s*", str(text))
+    allowed = f"a length (mm, cm, in, pt, px; a bare number is mm) from {MIN_LENGTH_MM:g}mm to {MAX_LENGTH_MM:g}mm"
     if not match:
         raise StippleError(f"{name} must be {allowed}, not {text!r}")
     value, unit = float(match.group(1)), match.group(2) or "mm"
