@@ -77,3 +77,17 @@ def test_distinct_outputs_still_work(folder):
 def test_read_only_outputs_are_not_replaced(folder):
     (folder / "old.svg").chmod(0o444)
     refused(["torus", "in.png", *FAST, "-o", "old.svg"], folder, "old.svg: is read-only")
+
+
+@pytest.mark.parametrize("source", ["frames", "frames/*.png"])
+@pytest.mark.parametrize("output", ["d.csv", "out.mp4"])
+def test_a_video_output_linked_to_a_frame_image_is_refused(folder, source, output):
+    """An output linked to one of a folder's (or glob's) frame images was written into it: only SOURCE itself
+    was compared with the outputs (a hostile review)."""
+    if output.endswith(".mp4"):
+        pytest.importorskip("av", reason="an MP4 output needs PyAV (pip install 'stipple[video]')")
+    (folder / "frames").mkdir()
+    for index in range(3):
+        make_image(folder / "frames" / f"{index}.png")
+    os.symlink("frames/1.png", folder / output)
+    refused(["video", source, "-M", "20", "-q", "-o", output], folder, "would overwrite the input frame")

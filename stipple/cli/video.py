@@ -100,7 +100,8 @@ def video(ctx, source, **options):
         check_frames_spare_inputs(plan["frames"], frames)
         reports = [("MP4", path) for path in plan["mp4"]]
         reports += [("frame pattern", frame_path(path, frames.selection.start)) for path in plan["frames"]]
-        inputs = [("input", source), init_input(options["init"])]
+        # A folder's or glob's frame images are inputs too: an output linked to one of them would write it.
+        inputs = [("input", source), *(("input frame", path) for path in frames.files), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], plan["csv"], options["checkpoint"], reports):
             drawn = [".png"] if plan["mp4"] or any(p.lower().endswith(".png") for p in plan["frames"]) else []
             check_png_outputs(drawn, frames.shape[::-1], options["png_width"], options["n_points"])
