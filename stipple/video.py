@@ -25,6 +25,7 @@ from scipy.ndimage import distance_transform_edt
 from .deformation import deform
 from .errors import StippleError
 from .halftone import (
+    check_bandwidth,
     check_integer,
     correct_low_frequencies,
     correction_bandwidth,
@@ -199,20 +200,23 @@ def stipple_video(
     keeper = FrameKeeper(
         checkpoint, checkpoint_settings(settings, identity), checkpoint_seconds, checkpoint_frames, resume
     )
-    bandwidth, timings, status, position = settings.bandwidth, [], "finished", -1
+    bandwidth = None if settings.bandwidth is None else check_bandwidth(settings.bandwidth)  # -N 0 meant the default
+    timings, status, position = [], "finished", -1
     reference, free = (None, None) if key is None else (key[1], None)
     previous, before = (None, None) if key is None else key
     inks = None if settings.palette is None else Inks(settings, None if key is None else key[1])
     for position, (index, picture) in enumerate(frames):
-        weights = inks.densities(picture) if inks is not None else _placed(picture, settings.placement)
+        try:
+            weights = inks.densities(picture) if inks is not None else _placed(picture, settings.placement)
+        except StippleError as error:  # a colour frame's separation (a blank frame) says which frame
+            raise StippleError(f"frame {index}: {error}") from None
         if not np.any(np.asarray(weights) > 0):
             raise StippleError(
                 f"frame {index} is blank (all white): there is nothing to place dots on; leave it out "
                 "(--start/--stop/--step) or cut the clip there"
             )
-        bandwidth = bandwidth or default_bandwidth(
-            settings.n_points, weights.sum(axis=0) if inks is not None else weights
-        )
+        if bandwidth is None:
+            bandwidth = default_bandwidth(settings.n_points, weights.sum(axis=0) if inks is not None else weights)
         change = frame_change(before, weights, settings.n_points)
         if previous is not None:
             margin = min(settings.free_margin, CUT_MARGIN) if change > CUT else settings.free_margin

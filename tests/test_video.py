@@ -205,10 +205,10 @@ def test_every_second_frame_plays_at_half_the_rate_so_the_clip_keeps_its_duratio
         assert container.streams.video[0].average_rate == 6 and container.streams.video[0].frames in (0, 2)
 
 
-def write_mp4(path, clip):
+def write_mp4(path, clip, rate=12, codec="mpeg4"):
     av = pytest.importorskip("av")
     with av.open(str(path), "w") as container:
-        stream = container.add_stream("mpeg4", rate=12)
+        stream = container.add_stream(codec, rate=rate)
         stream.height, stream.width = clip[0].shape
         stream.pix_fmt = "yuv420p"
         for gray in clip:
@@ -599,3 +599,37 @@ def test_levels_auto_takes_the_stills_rule_on_the_first_frame(tmp_path):
         Image.fromarray(page).save(folder / f"{index}.png")
     result = video(folder, "-M", 60, "--levels", "auto", "--iterations", 2, "-o", tmp_path / "v.csv")
     assert result.exit_code == 0, result.output
+
+
+def test_bandwidth_zero_is_refused_as_torus_refuses_it(tmp_path):
+    """``-N 0`` ran with the default bandwidth (``bandwidth or default``); ``stipple torus`` refuses it."""
+    source = frames_folder(tmp_path / "in", moving_disc(2))
+    result = video(source, "-M", COUNT, "-N", 0, "-o", tmp_path / "d.csv")
+    assert result.exit_code == 1 and "bandwidth must be an even integer in [2, 8192], not 0" in result.output
+    assert not (tmp_path / "d.csv").exists()
+
+
+def test_a_blank_colour_frame_is_named(tmp_path):
+    """A colour video's blank frame said 'the image is blank' without the frame (a gray one names it)."""
+    source = tmp_path / "in"
+    source.mkdir()
+    for k, colour in enumerate([(0, 200, 200), (200, 0, 0), (255, 255, 255)]):
+        Image.new("RGB", (40, 30), colour).save(source / f"{k}.png")
+    result = video(source, "--palette", "cmyk", "-M", 60, "-N", BANDWIDTH, "-o", tmp_path / "d.csv")
+    assert result.exit_code == 1 and "frame 2: " in result.output and "blank" in result.output
+
+
+def test_a_source_rate_no_mp4_plays_is_refused_unless_fps_is_given(tmp_path):
+    """A clip whose metadata said 240000 frames a second gave an MP4 that played no frame, exit 0 (a hostile
+    review); --fps is bounded by 1000, the source's rate was not."""
+    av = pytest.importorskip("av")
+    noise = list(np.random.default_rng(0).random((3, 32, 32)))  # the disc's frames decode to none at this rate
+    path = write_mp4(tmp_path / "fast.mp4", noise, rate=240000, codec="libx264")
+    result = video(path, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "out.mp4")
+    assert result.exit_code == 1 and "more than 1000, which an MP4 does not play; give --fps" in result.output
+    assert not (tmp_path / "out.mp4").exists()
+    assert video(path, "-M", COUNT, "-N", BANDWIDTH, "-o", tmp_path / "d.csv").exit_code == 0  # no MP4: no rate
+    result = video(path, "-M", COUNT, "-N", BANDWIDTH, "--fps", 24, "-o", tmp_path / "out.mp4")
+    assert result.exit_code == 0, result.output
+    with av.open(str(tmp_path / "out.mp4")) as container:
+        assert container.streams.video[0].average_rate == 24 and len(list(container.decode(video=0))) == 3

@@ -24,7 +24,7 @@ from .torus import tone_hints
 from .values import FiniteFloatRange
 
 DEFAULT_FPS = 24.0
-MIN_FPS = 0.01
+MIN_FPS, MAX_FPS = 0.01, 1000.0
 
 
 @click.command()
@@ -58,7 +58,7 @@ MIN_FPS = 0.01
 )
 @click.option(
     "--fps",
-    type=FiniteFloatRange(min=MIN_FPS, max=1000),
+    type=FiniteFloatRange(min=MIN_FPS, max=MAX_FPS),
     default=None,
     help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images, over --step: the same duration).",
 )
@@ -106,7 +106,7 @@ def video(ctx, source, **options):
             drawn = [".png"] if plan["mp4"] or any(p.lower().endswith(".png") for p in plan["frames"]) else []
             check_png_outputs(drawn, frames.shape[::-1], options["png_width"], options["n_points"])
             # Every --step-th frame shown at the source's rate over --step: the clip keeps its duration.
-            fps = options["fps"] or max((frames.fps or DEFAULT_FPS) / options["step"], MIN_FPS)
+            fps = options["fps"] or (source_fps(frames.fps, options["step"], source) if plan["mp4"] else None)
 
             def draw(points, density, fmt):
                 return torus_files(points, frames.shape, [fmt], settings, density)[fmt]
@@ -122,6 +122,19 @@ def video(ctx, source, **options):
     except StippleError as error:
         raise click.ClickException(str(error)) from None
     finish(result, stopped_by, options, started)
+
+
+def source_fps(rate, step, source):
+    """The MP4's frame rate without --fps: the source's (``DEFAULT_FPS`` for images) over ``step``, at least
+    ``MIN_FPS``; a rate past ``MAX_FPS`` is refused (a clip's metadata said 240000 a second, and its MP4 played
+    no frame)."""
+    fps = max((rate or DEFAULT_FPS) / step, MIN_FPS)
+    if fps > MAX_FPS:
+        raise StippleError(
+            f"{source}: its frame rate {rate:g} a second (over --step {step}) is more than {MAX_FPS:g}, which an MP4 "
+            "does not play; give --fps"
+        )
+    return fps
 
 
 def colour_drawing(shape, settings, separation):
