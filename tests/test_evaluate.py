@@ -346,3 +346,18 @@ def test_a_gray_picture_of_a_colour_input_gets_a_note(made, picture, options, no
     result = CliRunner().invoke(main, ["evaluate", str(made / picture), str(made / "c.png"), *options])
     assert result.exit_code == 0, result.output
     assert ("is gray and its input in colour" in result.output) == noted, result.output
+
+
+def test_coincident_points_are_refused_in_one_line(tmp_path, monkeypatch):
+    """40000 copies of one point made ``stipple evaluate`` ask for 800 million near-field pairs until the kernel
+    ended it; here 4000 copies with 0.5 GiB available: one line, exit 1."""
+    from PIL import Image
+
+    import stipple.allocator
+
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 0.5 * 2**30)
+    Image.fromarray(np.full((40, 60), 128, dtype=np.uint8)).save(tmp_path / "gray.png")
+    (tmp_path / "dup.csv").write_text("x,y\n" + "10,20\n" * 4000)
+    result = CliRunner().invoke(main, ["evaluate", str(tmp_path / "dup.csv"), str(tmp_path / "gray.png")])
+    assert result.exit_code == 1 and result.output.count("\n") == 1
+    assert "the points are clumped: about 8e+06 pairs" in result.output

@@ -292,3 +292,25 @@ def test_resume_with_the_near_field_is_bit_identical(rng, tmp_path):
     run(torus_problem(weights, 150, 24), iterations=5, checkpoint=saved)
     resumed = run(torus_problem(weights, 150, 24), iterations=12, checkpoint=saved, resume=True)
     np.testing.assert_array_equal(resumed.points, whole.points)
+
+
+@pytest.mark.parametrize("available, refused", [(0.5, True), (4.0, False)])
+def test_clumped_points_are_refused_before_their_pairs_fill_the_memory(monkeypatch, available, refused):
+    """4000 coincident points have n (n - 1) / 2 = 8.0 million pairs (about 1.1 GiB of candidates), which the
+    estimate from a sample finds exactly; 40000 of them (800 million pairs) ended ``stipple evaluate`` by the
+    kernel's OOM killer (a hostile review). Refused where they would not fit, one error naming the count."""
+    import stipple.allocator
+    from stipple.errors import StippleError
+    from stipple.nearfield import check_pair_memory
+
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: available * 2**30)
+    points = np.full((4000, 2), 0.25)
+    tree = TorusPairs(np.ones(2)).tree(points)
+    if refused:
+        with pytest.raises(StippleError, match=r"clumped: about 8e\+06 pairs .* 1\.1 GiB, more than the 0\.5 GiB"):
+            check_pair_memory(tree, points, 0.01)
+    else:
+        check_pair_memory(tree, points, 0.01)
+    spread = np.random.default_rng(0).random((4000, 2))  # about 1.3 neighbours each within 0.01: a few kB
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 2**20)
+    check_pair_memory(TorusPairs(np.ones(2)).tree(spread), spread, 0.01)
