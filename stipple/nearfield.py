@@ -361,7 +361,7 @@ def check_pair_memory(tree, positions, reach):
     available = allocator.available_memory()
     if pairs * PAIR_BYTES > available:
         raise StippleError(
-            f"the points are clumped: about {pairs:.2g} pairs lie within the near field's reach of each other, "
+            f"the points are clumped: about {pairs:.2g} pairs lie within reach of each other, "
             f"needing about {pairs * PAIR_BYTES / 2**30:.1f} GiB, more than the {available / 2**30:.1f} GiB "
             "available (many points in one place?)"
         )
