@@ -633,3 +633,15 @@ def test_a_source_rate_no_mp4_plays_is_refused_unless_fps_is_given(tmp_path):
     assert result.exit_code == 0, result.output
     with av.open(str(tmp_path / "out.mp4")) as container:
         assert container.streams.video[0].average_rate == 24 and len(list(container.decode(video=0))) == 3
+
+
+@pytest.mark.parametrize("pattern", ["%d/f.png", "run%02d/frame.svg"])
+def test_the_frame_number_goes_in_the_file_name_not_a_folder(tmp_path, pattern):
+    """With %d in a folder only the first frame's folder was checked before the run: a missing one for frame 1
+    failed after every frame was made, a read-only one was written into by root (a hostile review)."""
+    from stipple.errors import StippleError
+    from stipple.io.video import check_frame_pattern
+
+    with pytest.raises(StippleError, match="the frame number goes in the file name, not in a folder"):
+        check_frame_pattern(str(tmp_path / pattern))
+    assert check_frame_pattern("100%%/f_%d.png") == "100%%/f_%d.png"  # a literal '%' in a folder is fine

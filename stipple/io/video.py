@@ -205,6 +205,10 @@ def check_frame_pattern(path):
             f"{text}: a video writes one {extension[1:].upper()} per frame: the name needs one %d (or %04d) for "
             "the frame number, e.g. frames/%04d.png"
         )
+    if "%" in os.path.dirname(bare):
+        # Only the first frame's folder could be checked before the run: a missing one for a later frame failed
+        # after every frame was made, and a read-only one was written into by root.
+        raise StippleError(f"{text}: the frame number goes in the file name, not in a folder, e.g. frames/%04d.png")
     return text
 
 
