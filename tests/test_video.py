@@ -581,11 +581,11 @@ def test_a_dark_disc_moving_through_its_dots_leaves_no_holes():
     assert max(lightest[1:]) <= 1.5 * lightest[0], lightest
 
 
-def test_range_is_refused_for_a_video(tmp_path):
-    """A video's frames are images: --range (the .npy maps') was accepted and ignored."""
+def test_range_is_refused_for_image_frames(tmp_path):
+    """Image frames: --range (the .npy maps') was accepted and ignored."""
     source = frames_folder(tmp_path / "in", moving_disc(2))
     result = video(source, "-M", COUNT, "--range", "0", "1", "-o", tmp_path / "d.csv")
-    assert result.exit_code == 1 and "--range is for .npy maps" in result.output
+    assert result.exit_code == 1 and "--range is for .npy frames" in result.output
 
 
 def test_levels_auto_takes_the_stills_rule_on_the_first_frame(tmp_path):
@@ -645,3 +645,20 @@ def test_the_frame_number_goes_in_the_file_name_not_a_folder(tmp_path, pattern):
     with pytest.raises(StippleError, match="the frame number goes in the file name, not in a folder"):
         check_frame_pattern(str(tmp_path / pattern))
     assert check_frame_pattern("100%%/f_%d.png") == "100%%/f_%d.png"  # a literal '%' in a folder is fine
+
+
+def test_npy_frames_share_one_stretch_so_a_fading_map_fades(tmp_path):
+    """Each .npy frame was stretched to its own least and greatest value: a ramp fading to nearly even (0.9-1.0)
+    was stippled as the same ramp, and --range was refused (a hostile review). One stretch for the clip now; the
+    faded frame's dots spread evenly."""
+    source = tmp_path / "maps"
+    source.mkdir()
+    ramp = np.mgrid[0:20, 0:30][1] / 29.0
+    np.save(source / "0.npy", ramp)
+    np.save(source / "1.npy", 0.9 + 0.1 * ramp)
+    for extra in ([], ["--range", "0", "1"]):
+        result = video(source, "-M", 60, "-N", 12, *extra, "-o", tmp_path / "d.csv")
+        assert result.exit_code == 0, result.output
+        table = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
+        ramped, faded = (table[table[:, 0] == frame, 1].mean() for frame in (0, 1))
+        assert ramped > 19 and abs(faded - 15) < 1  # 2/3 of the width under a ramp; the middle when even

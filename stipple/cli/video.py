@@ -92,8 +92,8 @@ def video(ctx, source, **options):
             from .recipes import check_colour_options
 
             check_colour_options(options)
-        if options["value_range"] is not None:
-            raise StippleError("--range is for .npy maps; a video's frames are images (their gray values: --levels)")
+        if options["value_range"] is not None and options["palette"] is not None:
+            raise StippleError("--range is for gray .npy frames; a colour video's frames are images")
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])
@@ -258,7 +258,12 @@ def run_frames(frames, settings, outputs, options):
     pictures = (
         frames.colours()
         if colour
-        else hinted(frames.densities(invert=options["invert"], gamma=options["gamma"], levels=levels), options)
+        else hinted(
+            frames.densities(
+                invert=options["invert"], gamma=options["gamma"], levels=levels, value_range=options["value_range"]
+            ),
+            options,
+        )
     )
     progress.start(resume=options["resume"])
     with SIGNALS.deferred() as interruption:

@@ -19,8 +19,9 @@ from PIL import Image
 from ..errors import StippleError
 from .archive import MemberReader, open_archive
 from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import auto_levels, image_colour, image_density, load_colour, load_density
+from .images import auto_levels, check_grid, image_colour, image_density, load_array, load_colour, load_density
 from .mp4 import Mp4Stream, error_reason, require_av
+from .sources import read_source
 
 FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
 PATTERN_EXTENSIONS = (".png", ".svg")
@@ -45,12 +46,29 @@ class FrameSource:
     files: tuple
     selection: range
 
-    def densities(self, *, invert=False, gamma=1.0, levels=None):
+    def densities(self, *, invert=False, gamma=1.0, levels=None, value_range=None):
         """``(index, w)`` for every selected frame, ``index`` counting the source's frames from 0; ``levels`` as
-        for ``load_density``, "auto" the first frame's for every frame (a stretch changing by frame would flicker)."""
+        for ``load_density``, "auto" the first frame's for every frame (a stretch changing by frame would flicker);
+        ``value_range`` the values of ``.npy`` frames sent to 0 and 1, by default the least and the greatest of
+        all selected frames (each frame stretched to its own made a fading map look still)."""
         if levels == "auto":
             levels = auto_levels(1 - next(self._frames(lambda load: load(False, 1, None)))[1], "the first frame")
-        yield from self._frames(lambda load: load(invert, gamma, levels))
+        value_range = self._map_range(value_range)
+        yield from self._frames(lambda load: load(invert, gamma, levels, value_range=value_range))
+
+    def _map_range(self, value_range):
+        """``value_range`` for the selected ``.npy`` frames, or their values' least and greatest (None if every
+        value is the same: each frame then says it is constant)."""
+        maps = [
+            path for index, path in enumerate(self.files) if index in self.selection and path.lower().endswith(".npy")
+        ]
+        if value_range is not None and not maps:
+            raise StippleError("--range is for .npy frames; a video's or images' gray values are stretched by --levels")
+        if value_range is not None or not maps:
+            return value_range
+        values = [check_grid(load_array(read_source(path), path), path) for path in maps]
+        low, high = min(float(np.min(v)) for v in values), max(float(np.max(v)) for v in values)
+        return (low, high) if low < high else None
 
     def colours(self):
         """``(index, rgb)`` for every selected frame: ``(H, W, 3)`` in [0, 1], alpha composited on white."""
@@ -113,8 +131,11 @@ def _file_frames(source):
         yield index, partial(_load, source.files[index])
 
 
-def _load(path, invert, gamma, levels, colour=False):
-    return load_colour(path) if colour else load_density(path, invert=invert, gamma=gamma, levels=levels)
+def _load(path, invert, gamma, levels, colour=False, value_range=None):
+    if colour:
+        return load_colour(path)
+    # Not strict: a sequence's images ignore the range of its .npy frames.
+    return load_density(path, invert=invert, gamma=gamma, levels=levels, value_range=value_range, strict=False)
 
 
 def _open_video(source, selection):
@@ -172,8 +193,9 @@ def _video_frames(source, limit=None):
         raise StippleError(f"{source.name}: cannot decode the video ({error_reason(error)})") from None
 
 
-def _decoded(image, name, invert, gamma, levels, colour=False):
-    """A decoded frame's density, or its colours in [0, 1] alpha composited on white (as ``load_colour``)."""
+def _decoded(image, name, invert, gamma, levels, colour=False, value_range=None):
+    """A decoded frame's density, or its colours in [0, 1] alpha composited on white (as ``load_colour``); a
+    video has no ``.npy`` frames for ``value_range``."""
     if not colour:
         return image_density(image, invert=invert, gamma=gamma, levels=levels, name=name)
     return image_colour(image, name)
