@@ -662,3 +662,13 @@ def test_npy_frames_share_one_stretch_so_a_fading_map_fades(tmp_path):
         table = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
         ramped, faded = (table[table[:, 0] == frame, 1].mean() for frame in (0, 1))
         assert ramped > 19 and abs(faded - 15) < 1  # 2/3 of the width under a ramp; the middle when even
+
+
+def test_a_pipe_as_the_video_is_refused_at_once(tmp_path):
+    """A FIFO without a writer blocked for ever (a signal then said 'not a video'), and a pipe cannot be read
+    twice, as the first frame and the run read it."""
+    import os
+
+    os.mkfifo(tmp_path / "clip.mp4")
+    result = video(tmp_path / "clip.mp4", "-M", COUNT, "-o", tmp_path / "d.csv")
+    assert result.exit_code == 1 and "not a regular file (a pipe?)" in result.output

@@ -143,6 +143,9 @@ def _open_video(source, selection):
         raise StippleError(f"{source}: no such file, folder or matching frame images")
     if os.path.splitext(source)[1].lower() in FRAME_EXTENSIONS:
         raise StippleError(f"{source}: an image, not a video; use 'stipple torus', or give a folder or glob of frames")
+    if not os.path.isfile(source):
+        # A pipe waited for a writer for ever, and could not be read twice (the first frame, then the run).
+        raise StippleError(f"{source}: not a regular file (a pipe?); a video is read twice: save it to a file first")
     av = require_av(f"{source}: reading a video")
     try:
         with av.open(source) as container:
