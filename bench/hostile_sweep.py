@@ -73,6 +73,8 @@ def make_inputs(folder):
     )
     Image.open(folder / "grad.png").convert("RGB").save(folder / "drawn.png")
     (folder / "bad_points.csv").write_text("x,y\n1,nan\n2,3\n")
+    # A million copies of one point (5 million kept render busy for over 10 minutes before they were one point).
+    (folder / "copies.csv").write_text("x,y\n" + "3,4\n" * 1_000_000 + "5,6\n")
     (folder / "one_point.csv").write_text("x,y\n1,2\n")
 
 
@@ -325,6 +327,7 @@ def cases():
         # render
         (ok, ["render", "dots.csv", "-o", "r.png"], ["r.png"]),
         (ok, ["render", "dots.csv", "-o", "r.svg", "--dot-style", "circle"], ["r.svg"]),
+        (ok, ["render", "copies.csv", "-o", "r.svg", "--dot-style", "circle"], ["r.svg"]),
         *[
             (no, ["render", *args], [])
             for args in (

@@ -236,3 +236,23 @@ def test_vpype_stippleline_keeps_the_pen_on_the_page(ramp_path, monkeypatch):
     path, height = line_path(ramp_path, 4, width=96.0, pen_width=2.0)
     assert height == pytest.approx(64.0)
     np.testing.assert_allclose(path, [1 + 1j, 95 + 1j, 95 + 63j, 48 + 32j, 1 + 1j])
+
+
+def test_a_pen_too_wide_for_the_page_is_refused_for_a_line_as_for_dots():
+    """A 150 mm pen on a 200 mm page: the vertices were clamped onto the page's middle line (a code review)."""
+    from stipple.errors import StippleError
+    from stipple.render.flat import line_drawing
+
+    points = np.random.default_rng(3).random((50, 2))
+    with pytest.raises(StippleError, match="the pen is too wide for the page: its strokes ink"):
+        line_drawing(points, (32, 48), width=(200.0, "mm"), pen_width=(150.0, "mm"))
+
+
+def test_a_thin_pen_draws_a_bounded_number_of_discs():
+    """The discs along a line were an eighth of the pen apart whatever the pen: a 0.001 mm pen's 300 vertices
+    took 2.5 GB (a code review). Half a fine pixel apart at least."""
+    from stipple.io.png import stroke_centres
+
+    path = np.array([0, 10, 10 + 10j, 10j, 0])  # 40 units long
+    assert len(stroke_centres([path], 1e-6, least_spacing=0.1)) == 4 * (100 + 1)
+    assert len(stroke_centres([path], 1.6, least_spacing=0.1)) == 4 * (50 + 1)  # an eighth of the pen

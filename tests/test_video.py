@@ -668,7 +668,21 @@ def test_a_pipe_as_the_video_is_refused_at_once(tmp_path):
     """A FIFO without a writer blocked for ever (a signal then said 'not a video'), and a pipe cannot be read
     twice, as the first frame and the run read it."""
     import os
+    import subprocess
+    import sys
 
     os.mkfifo(tmp_path / "clip.mp4")
-    result = video(tmp_path / "clip.mp4", "-M", COUNT, "-o", tmp_path / "d.csv")
-    assert result.exit_code == 1 and "not a regular file (a pipe?)" in result.output
+    command = [sys.executable, "-m", "stipple", "video", "clip.mp4", "-M", str(COUNT), "-q", "-o", "d.csv"]
+    result = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=60)  # it waited for ever
+    assert result.returncode == 1 and "not a regular file (a pipe?)" in result.stderr
+
+
+def test_levels_on_npy_frames_is_refused_as_for_a_still_map(tmp_path):
+    """With the clip-wide range the frames were read leniently, and --levels on .npy frames was ignored (a code
+    review); a still map refuses it."""
+    source = tmp_path / "maps"
+    source.mkdir()
+    for index in range(2):
+        np.save(source / f"{index}.npy", np.mgrid[0:20, 0:30][1] / 29.0 + index)
+    result = video(source, "-M", 60, "-N", 12, "--levels", "0.1,0.9", "-o", tmp_path / "d.csv")
+    assert result.exit_code == 1 and "--levels is for images; a .npy map is stretched by --range" in result.output

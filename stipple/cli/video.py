@@ -92,8 +92,6 @@ def video(ctx, source, **options):
             from .recipes import check_colour_options
 
             check_colour_options(options)
-        if options["value_range"] is not None and options["palette"] is not None:
-            raise StippleError("--range is for gray .npy frames; a colour video's frames are images")
         settings = render_settings(options)
         plan = plan_outputs(options["outputs"])
         frames = open_frames(source, start=options["start"], stop=options["stop"], step=options["step"])

@@ -18,10 +18,11 @@ import numpy as np
 from ..errors import StippleError
 from .plot_svg_path import path_strokes
 from .sources import read_source
+from .units import UNITS
 
 MAX_SVG_BYTES = 1 << 28
 ROUND_SEGMENTS = 256
-MM_PER = {"mm": 1.0, "cm": 10.0, "in": 25.4, "px": 25.4 / 96, "pt": 25.4 / 72, "pc": 25.4 / 6, "": 25.4 / 96}
+MM_PER = {**UNITS, "pc": 25.4 / 6, "": UNITS["px"]}  # SVG lengths: the options' units, picas, bare user units
 SVG = "{http://www.w3.org/2000/svg}"
 INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
 SKIPPED = {"defs", "metadata", "title", "desc", "style", "clipPath", "mask", "symbol", "marker", "pattern"}

@@ -133,7 +133,7 @@ def render_line(pixels, size, pixels_wide, pen_width, closed=True, colour=BLACK,
     path = vertices[:, 0] + 1j * vertices[:, 1]
     if closed and len(path) > 1:
         path = np.append(path, path[:1])
-    centres = stroke_centres([path], pen_width)
+    centres = stroke_centres([path], pen_width, least_spacing=0.5 / scale[0])
     canvas.paste(ink, mask=_disc_mask(centres, np.full(len(centres), pen_width / 2), scale, canvas.size))
     return canvas.reduce(SUPERSAMPLE)
 
@@ -209,7 +209,7 @@ def _draw_layer(canvas, dots, scale, pen_width, fill):
     if dots.paths is not None:
         # A group of paths at a time: a pen circle is about a hundred discs.
         for start in range(0, len(dots.paths), PATHS_PER_GROUP):
-            centres = stroke_centres(dots.paths[start : start + PATHS_PER_GROUP], pen_width)
+            centres = stroke_centres(dots.paths[start : start + PATHS_PER_GROUP], pen_width, 0.5 / scale[0])
             radii = np.full(len(centres), pen_width / 2)
             canvas.paste(fill, mask=_disc_mask(centres, radii, scale, canvas.size))
     elif dots.squash is None:
@@ -228,11 +228,12 @@ def _draw_layer(canvas, dots, scale, pen_width, fill):
             )
 
 
-def stroke_centres(paths, pen_width):
+def stroke_centres(paths, pen_width, least_spacing=0.0):
     """Centres of discs ``pen_width`` wide along each pen path (complex vertices), at most an eighth of the width
     apart, both ends included: their union is the path stroked with round caps and joins, as the SVG's, its
-    width short by less than 0.5 % between two discs."""
-    spacing = pen_width / 8
+    width short by less than 0.5 % between two discs. At least ``least_spacing`` apart (half a fine pixel of the
+    drawing): a 0.001 mm pen's line took 2.5 GB and 14 s for 300 vertices."""
+    spacing = max(pen_width / 8, least_spacing)
     paths = [np.asarray(path, dtype=complex) for path in paths if len(path)]
     if not paths:
         return np.zeros((0, 2))

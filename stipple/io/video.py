@@ -21,9 +21,10 @@ from .archive import MemberReader, open_archive
 from .commit import StagedOutputs, atomic_write, write_stdout
 from .images import auto_levels, check_grid, image_colour, image_density, load_array, load_colour, load_density
 from .mp4 import Mp4Stream, error_reason, require_av
-from .sources import read_source
+from .sources import PICTURE_EXTENSIONS, read_source
 
-FRAME_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".npy")
+# The still formats of a frame sequence (a GIF is read as a video), and .npy maps.
+FRAME_EXTENSIONS = tuple(extension for extension in PICTURE_EXTENSIONS if extension != ".gif") + (".npy",)
 PATTERN_EXTENSIONS = (".png", ".svg")
 # Pillow's decompression-bomb limit, also for frames that PyAV decodes.
 MAX_FRAME_PIXELS = int(Image.MAX_IMAGE_PIXELS or 89_478_485)
@@ -66,8 +67,10 @@ class FrameSource:
             raise StippleError("--range is for .npy frames; a video's or images' gray values are stretched by --levels")
         if value_range is not None or not maps:
             return value_range
-        values = [check_grid(load_array(read_source(path), path), path) for path in maps]
-        low, high = min(float(np.min(v)) for v in values), max(float(np.max(v)) for v in values)
+        low, high = np.inf, -np.inf
+        for path in maps:  # one frame in memory at a time
+            values = check_grid(load_array(read_source(path), path), path)
+            low, high = min(low, float(values.min())), max(high, float(values.max()))
         return (low, high) if low < high else None
 
     def colours(self):
@@ -134,8 +137,9 @@ def _file_frames(source):
 def _load(path, invert, gamma, levels, colour=False, value_range=None):
     if colour:
         return load_colour(path)
-    # Not strict: a sequence's images ignore the range of its .npy frames.
-    return load_density(path, invert=invert, gamma=gamma, levels=levels, value_range=value_range, strict=False)
+    # The range is the .npy frames' (a sequence's images have none); --levels on a map is refused as for a still.
+    value_range = value_range if path.lower().endswith(".npy") else None
+    return load_density(path, invert=invert, gamma=gamma, levels=levels, value_range=value_range)
 
 
 def _open_video(source, selection):

@@ -84,14 +84,20 @@ def inset(centres, size, margin, least=0.0):
     dot, ``pen_extent``), refused past that bound, where the inset stops (a 500 mm pen inked far past a 300-unit
     page)."""
     extent = np.asarray(size, dtype=np.float64)
-    if least > MAX_MARGIN * extent.min():
-        raise StippleError(
-            f"the pen is too wide for the page: its dots ink {least:.4g} units from their centres, more than "
-            f"{MAX_MARGIN:g} of the page's shorter side ({extent.min():.4g}); give a narrower --pen-width or a "
-            "larger --width"
-        )
+    check_pen_fits(least, extent, "its dots ink")
     margin = min(float(margin), MAX_MARGIN * extent.min())
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
+
+
+def check_pen_fits(reach, extent, what):
+    """Refuse a pen that inks ``reach`` units from where it is placed (``what`` says how) when that is more than
+    ``MAX_MARGIN`` of the page's shorter side (``extent``, its width and height)."""
+    if reach > MAX_MARGIN * min(extent):
+        raise StippleError(
+            f"the pen is too wide for the page: {what} {reach:.4g} units from their centres, more than "
+            f"{MAX_MARGIN:g} of the page's shorter side ({min(extent):.4g}); give a narrower --pen-width or a "
+            "larger --width"
+        )
 
 
 def flat_dots(layers, size, tone_radius=None, radius=None, pen=None, dot_style=None):

@@ -6,6 +6,7 @@ import numpy as np
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
 from .dots import (
+    check_pen_fits,
     flat_dots,
     home_positions,
     ink_radius,
@@ -146,11 +147,11 @@ def line_drawing(
 
 
 def within(pixels, size, margin):
-    """``pixels`` moved to at least ``margin`` from the edges of a ``size = (width, height)`` canvas (at most to
-    its middle): an affine inset as the dots' (``inset``) moved a ramp's whole top row of strokes off it, 0.40 of
-    ink drawn 0.10."""
+    """``pixels`` moved to at least ``margin`` from the edges of a ``size = (width, height)`` canvas (a pen too
+    wide for the page refused, as for dots: ``check_pen_fits``): an affine inset as the dots' (``inset``) moved a
+    ramp's whole top row of strokes off it, 0.40 of ink drawn 0.10."""
     extent = np.asarray(size, dtype=np.float64)
-    margin = np.minimum(margin, extent / 2)
+    check_pen_fits(margin, extent, "its strokes ink")
     return np.clip(pixels, margin, extent - margin)
 
 
