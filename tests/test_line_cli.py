@@ -256,3 +256,15 @@ def test_a_thin_pen_draws_a_bounded_number_of_discs():
     path = np.array([0, 10, 10 + 10j, 10j, 0])  # 40 units long
     assert len(stroke_centres([path], 1e-6, least_spacing=0.1)) == 4 * (100 + 1)
     assert len(stroke_centres([path], 1.6, least_spacing=0.1)) == 4 * (50 + 1)  # an eighth of the pen
+
+
+def test_a_dark_strip_a_few_pixels_high_keeps_its_tone_stroke():
+    """Without a pen the tone stroke of a dark strip 6 px high is wider than a quarter of it: it was refused as a
+    pen too wide for the page (a pen no one gave); its margin is capped at a quarter of the side instead."""
+    from stipple.render.flat import line_drawing
+
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    points = np.column_stack([0.5 + 0.45 * np.cos(t), 0.5 + 0.45 * np.sin(7 * t)])
+    drawing = line_drawing(points, (6, 40), ink=0.9)
+    half = min(drawing.stroke / 2, 1.5)  # half the stroke, at most a quarter of the strip's 6 px
+    assert drawing.stroke > 2.5 and drawing.line.min() >= half - 1e-12 and drawing.line[:, 1].max() <= 6 - half + 1e-12

@@ -6,6 +6,7 @@ import numpy as np
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
 from .dots import (
+    MAX_MARGIN,
     check_pen_fits,
     flat_dots,
     home_positions,
@@ -126,24 +127,28 @@ def line_drawing(
     size = (columns, rows)
     pixels = np.asarray(points) * np.array([columns, rows])
     if pen_width is not None:
-        stroke = margin = to_user_units(pen_width, width, columns)
-    elif ink is None:
-        stroke = margin = 1.0
+        stroke = to_user_units(pen_width, width, columns)
+        margin = stroke / 2  # a given pen too wide for the page is refused (``within``)
     else:
-        # The tone stroke of the line as drawn, kept half the stroke first found for it from the edges.
-        first = tone_stroke(pixels, shape, ink)
-        stroke = tone_stroke(within(pixels, size, first / 2), shape, ink)
-        margin = max(first, stroke)
+        # The tone stroke of the line as drawn, kept half the stroke first found for it from the edges (at most
+        # MAX_MARGIN of the shorter side: a dark strip a few pixels high asks for a stroke wider than that).
+        first = 1.0 if ink is None else tone_stroke(pixels, shape, ink)
+        stroke = first if ink is None else tone_stroke(within(pixels, size, _capped(first / 2, size)), shape, ink)
+        margin = _capped(max(first, stroke) / 2, size)
     return Drawing(
         size,
         width,
         line_png_width(png_width, shape),
         notes=(f"one closed line, {len(pixels)} vertices, stroke {stroke:.3g} px",),
         background=tuple(background),
-        line=within(pixels, size, margin / 2),
+        line=within(pixels, size, margin),
         stroke=stroke,
         line_colour=tuple(color),
     )
+
+
+def _capped(margin, size):
+    return min(margin, MAX_MARGIN * min(size))
 
 
 def within(pixels, size, margin):
