@@ -264,7 +264,7 @@ def test_a_dark_strip_a_few_pixels_high_keeps_its_tone_stroke():
     from stipple.render.flat import line_drawing
 
     t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
-    points = np.column_stack([0.5 + 0.45 * np.cos(t), 0.5 + 0.45 * np.sin(7 * t)])
-    drawing = line_drawing(points, (6, 40), ink=0.9)
+    points = np.column_stack([0.5 + 0.45 * np.cos(t), 0.5 + 0.45 * np.sin(2 * t)])
+    drawing = line_drawing(points, (6, 40), ink=0.95)
     half = min(drawing.stroke / 2, 1.5)  # half the stroke, at most a quarter of the strip's 6 px
-    assert drawing.stroke > 2.5 and drawing.line.min() >= half - 1e-12 and drawing.line[:, 1].max() <= 6 - half + 1e-12
+    assert drawing.stroke > 3 and drawing.line.min() >= half - 1e-12 and drawing.line[:, 1].max() <= 6 - half + 1e-12
