@@ -19,7 +19,7 @@ import numpy as np
 from .errors import StippleError
 from .halftone import Problem, check_bandwidth, check_threads, default_threads, run
 from .parallel import map_items
-from .torus import DEFAULT_EPSILON, check_weights, default_bandwidth, torus_problem
+from .torus import DEFAULT_EPSILON, check_weights, default_bandwidth, torus_problem, unit_scaled
 
 
 def class_counts(masses, total):
@@ -207,6 +207,8 @@ def multiclass_problem(
     densities = [check_weights(weights) for weights in densities]
     if not densities or any(weights.shape != densities[0].shape for weights in densities):
         raise StippleError("class densities must be one or more arrays of the same shape")
+    peak = max(float(weights.max()) for weights in densities)  # one scale for all: their masses stay in proportion
+    densities = [unit_scaled(weights, peak) for weights in densities]
     names = [f"class{index}" for index in range(len(densities))] if names is None else list(names)
     term_weights = [1.0] * (len(densities) + 1) if term_weights is None else [float(a) for a in term_weights]
     if len(names) != len(densities) or len(term_weights) != len(densities) + 1:

@@ -204,7 +204,14 @@ def torus_kernel(bandwidths, scale):
 
 
 def check_weights(weights):
-    weights = check_grid(np.asarray(weights, dtype=np.float64), "weights")
+    """``weights`` as a finite, non-negative, not all zero grid of float64 (complex values and masked arrays are
+    refused: numpy dropped their imaginary part or mask without a word)."""
+    if np.ma.isMaskedArray(weights):
+        raise StippleError("weights: a masked array; fill its masked cells first (e.g. weights.filled(0))")
+    values = np.asarray(weights)
+    if values.dtype.kind not in "biuf":
+        raise StippleError(f"weights must be real numbers, not {values.dtype}")
+    weights = check_grid(values.astype(np.float64), "weights")
     if np.any(weights < 0):
         raise StippleError("weights must be non-negative")
     if not np.any(weights > 0):
@@ -212,6 +219,18 @@ def check_weights(weights):
             "the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
         )
     return weights
+
+
+# The dots are the same at any scale of the weights, but far from 1 the energy's squares under- or overflow (at
+# 1e-80 a run stopped as "converged" at its start, at 1e80 with a NaN energy; a hostile review): weights whose
+# largest value lies outside WEIGHT_SCALES are divided by it.
+WEIGHT_SCALES = (1e-12, 1e12)
+
+
+def unit_scaled(weights, peak=None):
+    """``weights`` over ``peak`` (default their largest value) where that lies outside ``WEIGHT_SCALES``."""
+    peak = float(weights.max()) if peak is None else peak
+    return weights if WEIGHT_SCALES[0] <= peak <= WEIGHT_SCALES[1] else weights / peak
 
 
 def torus_problem(
@@ -241,7 +260,7 @@ def torus_problem(
     """
     if isinstance(weights, (str, os.PathLike)):
         weights = load_density(weights)
-    weights = check_weights(weights)
+    weights = unit_scaled(check_weights(weights))
     n_points = check_count(n_points)
     correction_bandwidth = bandwidth
     if bandwidth is None:
