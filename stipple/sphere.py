@@ -156,6 +156,14 @@ def as_density(weights, lon0=0.0):
     return CellMap(weights, lon0)
 
 
+def check_lon0(lon0):
+    """``lon0`` as a float in [-360, 360] (as ``--lon0``): NaN failed in ducc0's assertion, and 360 * 2**60
+    was a different map, its longitudes rounded away."""
+    if not isinstance(lon0, (int, float, np.integer, np.floating)) or isinstance(lon0, bool) or not -360 <= lon0 <= 360:
+        raise StippleError(f"lon0 must be a number of degrees in [-360, 360], not {lon0!r}")
+    return float(lon0)
+
+
 def unit_peak(density):
     """A map scaled to a largest value of 1 (the problem is the same at any scale; maps are read so, but a pen's
     clip, ``stipple.pipelines.pen.sphere_pen_density``, can bring one to 5e-36, where the single-precision
@@ -191,7 +199,7 @@ def sphere_problem(
     kernel keep their bandwidth, the plain metric, their start and ``epsilon`` throughout (``derivative_epsilon``
     is ignored there).
     """
-    density = unit_peak(as_density(weights, lon0))
+    density = unit_peak(as_density(weights, check_lon0(lon0)))
     n_points = check_count(n_points)
     kernel = default_kernel(density, n_points) if kernel is None else kernel
     near_field = kernel.startswith("distance") if near_field is None else bool(near_field)

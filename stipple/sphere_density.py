@@ -109,13 +109,27 @@ class AnalyticDensity:
         self.function = function
         self.name = name
 
+    def values_at(self, points):
+        """The function at ``points`` ``(K, 3)``, checked: one finite, non-negative real number per point (a
+        function returning a number, or complex values, failed deep inside with numpy's or ducc0's error)."""
+        values = np.asarray(self.function(points))
+        if values.shape != (len(points),) or values.dtype.kind not in "biuf":
+            raise StippleError(
+                f"{self.name}: the density function must return one real number per point, an array of shape "
+                f"({len(points)},), not {values.dtype} of shape {values.shape}"
+            )
+        values = values.astype(np.float64)
+        if not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise StippleError(f"{self.name}: density must be finite and non-negative")
+        return values
+
     def _grid(self, lmax):
         """Gauss-Legendre rings and equispaced longitudes, exact for degree ``2 * lmax``."""
         rings = 2 * lmax + 2
         theta = np.arccos(-roots_legendre(rings)[0])
         phi = 2 * np.pi * np.arange(2 * rings) / (2 * rings)
         points = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
-        return theta, phi, self.function(points.reshape(-1, 3)).reshape(len(theta), len(phi))
+        return theta, phi, self.values_at(points.reshape(-1, 3)).reshape(len(theta), len(phi))
 
     @property
     def mean(self):
@@ -137,7 +151,7 @@ class AnalyticDensity:
         latitudes = (np.arange(rows) + 0.5) * np.pi / rows
         longitudes = (np.arange(2 * rows) + 0.5) * np.pi / rows
         z, phi = np.cos(latitudes)[:, None] + 0 * longitudes, longitudes[None, :] + 0 * latitudes[:, None]
-        return CellMap(self.function(unit_vectors(z.ravel(), phi.ravel())).reshape(rows, 2 * rows))
+        return CellMap(self.values_at(unit_vectors(z.ravel(), phi.ravel())).reshape(rows, 2 * rows))
 
     def cell_map(self):
         """The density on a 0.5° cell grid (for sampling starts and cap masses), evaluated once."""
@@ -192,7 +206,7 @@ def density_at(density, points):
         ``(M,)`` density values.
     """
     if hasattr(density, "function"):
-        return np.asarray(density.function(points), dtype=np.float64)
+        return density.values_at(points)
     if not hasattr(density, "values"):
         return density_at(density.cell_map(), points)
     rows, columns = density.values.shape
