@@ -136,10 +136,30 @@ def check_epsilon(epsilon):
     return float(epsilon)
 
 
-def check_run_options(*, tol=1e-4, time_limit=None, settle=None, iterations=400, beta=BETAS[0], **_):
-    """Raise if a stopping or direction setting of ``run`` is out of range (checked before any work)."""
+def check_run_options(
+    *,
+    tol=1e-4,
+    time_limit=None,
+    settle=None,
+    iterations=400,
+    beta=BETAS[0],
+    seed=0,
+    restart_every=None,
+    checkpoint_seconds=None,
+    checkpoint_iterations=None,
+    **_,
+):
+    """Raise if a stopping, direction, seed or checkpoint setting of ``run`` is out of range (checked before any
+    work: a seed of -1 or 1.5 failed in numpy's words, a ``restart_every`` of "a" after the start was made)."""
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise StippleError(f"seed must be a non-negative integer (the same seed gives the same points), not {seed!r}")
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
+    if restart_every is not None:
+        check_integer("restart_every", restart_every, 1, 10**9)
+    check_positive("checkpoint_seconds", checkpoint_seconds, allow_none=True)
+    if checkpoint_iterations is not None:
+        check_integer("checkpoint_iterations", checkpoint_iterations, 1, 10**9)
     if settle is not None and (not isinstance(settle, (int, float)) or not 0 <= settle < 1):
         raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
     check_integer("iterations", iterations, 0, 10**9)
@@ -157,12 +177,18 @@ def initial_points(problem, init, rng):
         if init in ("stratified", "density"):
             return problem.sample(rng, problem.n_points)
         return problem.manifold.random(rng, problem.n_points)
-    points = np.asarray(init, dtype=np.float64)
+    points = np.asarray(init)
     expected = (problem.n_points, problem.manifold.dimension)
-    if points.shape != expected:
-        raise StippleError(f"initial points must have shape {expected}, not {points.shape}")
+    if points.shape != expected or points.dtype.kind not in "biuf":
+        raise StippleError(
+            f"initial points must be real numbers of shape {expected}, not {points.dtype} {points.shape}"
+        )
+    points = points.astype(np.float64)
     if not np.all(np.isfinite(points)) or (problem.domain == "sphere" and np.any(np.all(points == 0, axis=1))):
         raise StippleError("initial points contain NaN, infinite or (on the sphere) zero vectors")
+    if problem.domain == "sphere":
+        # Each vector over its largest entry first: lengths of 1e160 or 1e-320 over- or underflowed the norm.
+        points = points / np.max(np.abs(points), axis=1, keepdims=True)
     return problem.manifold.canonical(points)
 
 
@@ -226,7 +252,17 @@ def run(
     from .checkpoint import Checkpointer, load_checkpoint
 
     settle = problem.settle if settle is None else settle
-    check_run_options(tol=tol, time_limit=time_limit, settle=settle, iterations=iterations, beta=beta)
+    check_run_options(
+        tol=tol,
+        time_limit=time_limit,
+        settle=settle,
+        iterations=iterations,
+        beta=beta,
+        seed=seed,
+        restart_every=restart_every,
+        checkpoint_seconds=checkpoint_seconds,
+        checkpoint_iterations=checkpoint_iterations,
+    )
     saver = None
     if checkpoint is not None:
         if not resume and os.path.exists(checkpoint):

@@ -431,3 +431,33 @@ def test_a_map_too_large_for_the_memory_is_refused_before_any_work(monkeypatch):
     monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 22.8 * 2**30)
     with pytest.raises(StippleError, match="needs about .* GiB of memory"):
         sphere_problem(peak, 20_000_000)
+
+
+@pytest.mark.parametrize("lon0", [float("nan"), float("inf"), 1e300, None, "x", True])
+def test_lon0_is_checked_where_it_enters(lon0):
+    """NaN failed in ducc0's assertion, 1e300 was a different map (its longitudes rounded away)."""
+    with pytest.raises(StippleError, match=r"lon0 must be a number of degrees in \[-360, 360\]"):
+        sphere_problem(np.random.default_rng(1).random((16, 32)), 50, lon0=lon0)
+
+
+@pytest.mark.parametrize("factor", [1e160, 1e-300])
+def test_start_vectors_of_any_length_are_their_directions(factor):
+    """Vectors of length 1e160 overflowed the norm (the run collapsed to 3 points and said it finished); of
+    1e-300 underflowed it (scipy's 'data must be finite')."""
+    from stipple import halftone_sphere
+
+    start = np.random.default_rng(0).standard_normal((60, 3))
+    plain = halftone_sphere(None, 60, iterations=3, init=start, threads=1)
+    scaled = halftone_sphere(None, 60, iterations=3, init=start * factor, threads=1)
+    np.testing.assert_allclose(scaled.points, plain.points, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "function",
+    [lambda p: 1.0, lambda p: np.ones(len(p) - 1), lambda p: np.ones(len(p)) + 0j],
+    ids=["scalar", "short", "complex"],
+)
+def test_a_density_function_must_return_one_real_number_per_point(function):
+    """A number, a short array or complex values failed deep inside numpy or ducc0."""
+    with pytest.raises(StippleError, match="the density function must return one real number per point"):
+        sphere_problem(function, 50)

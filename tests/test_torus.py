@@ -247,3 +247,49 @@ def test_the_memory_check_counts_what_a_point_costs(monkeypatch, shape, count, t
     monkeypatch.setattr(stipple.torus, "make_nufft", past)
     with pytest.raises(StippleError if refused else _PastTheMemoryCheck):
         torus_problem(np.full(shape, 0.5), count, threads=threads)
+
+
+@pytest.mark.parametrize("scale", [1e-80, 1e-30, 1e30, 1e200])
+def test_weights_at_any_scale_give_the_same_dots(scale):
+    """The dots are the same at any scale of the weights; at 1e-80 a run stopped as "converged" at its start and
+    at 1e200 with a NaN energy (a hostile review of the API)."""
+    from stipple import halftone_torus
+
+    weights = np.random.default_rng(1).random((16, 16))
+    plain = halftone_torus(weights, 50, iterations=3, threads=1)
+    scaled = halftone_torus(weights * scale, 50, iterations=3, threads=1)
+    assert scaled.status == plain.status == "max_iterations" and np.isfinite(scaled.energy)
+    np.testing.assert_allclose(scaled.points, plain.points, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "weights, message",
+    [
+        (np.ones((8, 8)) + 0j, "weights must be real numbers, not complex128"),
+        (np.ma.masked_array(np.ones((8, 8)), mask=np.eye(8)), "a masked array"),
+    ],
+)
+def test_complex_and_masked_weights_are_refused(weights, message):
+    """numpy dropped the imaginary part (with a ComplexWarning) and the mask without a word."""
+    with pytest.raises(StippleError, match=message):
+        torus_problem(weights, 20)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"seed": -1}, "seed must be a non-negative integer"),
+        ({"seed": 1.5}, "seed must be a non-negative integer"),
+        ({"seed": None}, "seed must be a non-negative integer"),
+        ({"restart_every": "a"}, "restart_every must be an integer in"),
+        ({"restart_every": 0}, "restart_every must be an integer in"),
+        ({"checkpoint_seconds": float("nan")}, "checkpoint_seconds must be a positive number"),
+        ({"checkpoint_iterations": 1.5}, "checkpoint_iterations must be an integer in"),
+    ],
+)
+def test_run_settings_are_checked_where_they_enter(options, message):
+    """A seed of -1 or 1.5 failed in numpy's words, None gave other points at every call, a restart_every of "a"
+    failed after the start was made, 0 acted as never (a hostile review of the API)."""
+    problem = torus_problem(np.ones((8, 8)), 20, 8)
+    with pytest.raises(StippleError, match=message):
+        run(problem, iterations=2, **options)
