@@ -359,6 +359,7 @@ def spread_close_dots(problem, result, callback=None, iterations=SPREAD_ITERATIO
         points=after.points,
         energy=after.energy,
         message=f"{result.message}; {moved} close dots spread, then {after.iterations} iterations",
+        status="stopped" if after.status == "stopped" else result.status,  # the callback's stop is the run's
     )
 
 
@@ -392,8 +393,9 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
         summary.append(f"{correction.iterations} at N={coarse.bandwidth}")
         if correction.status == "stopped":
             break
+    status = "stopped" if corrections and corrections[-1].status == "stopped" else result.status
     if sum(level.iterations for level in corrections) == 0:
-        return replace(result, corrections=tuple(corrections))
+        return replace(result, corrections=tuple(corrections), status=status)
     norm = gradient_norm(problem, points)
     initial = result.state.initial_gradient_norm
     return replace(
@@ -403,6 +405,7 @@ def correct_low_frequencies(problem, result, time_limit=None, callback=None, lev
         relative_gradient_norm=norm / initial if initial > 0 else 0.0,
         message=f"{result.message}; low-frequency correction: {', '.join(summary)} iterations",
         corrections=tuple(corrections),
+        status=status,
     )
 
 

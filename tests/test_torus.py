@@ -293,3 +293,19 @@ def test_run_settings_are_checked_where_they_enter(options, message):
     problem = torus_problem(np.ones((8, 8)), 20, 8)
     with pytest.raises(StippleError, match=message):
         run(problem, iterations=2, **options)
+
+
+def test_a_stop_asked_in_the_spread_step_stops_the_run():
+    """A callback that asks to stop after the main run's iterations: the result said "max_iterations" and the
+    correction ran on, calling it again (a hostile review of the API)."""
+    weights = np.random.default_rng(2).random((32, 32)) ** 3
+    problem = torus_problem(weights, 400)
+    calls = []
+
+    def stop_after_the_main_run(state):
+        calls.append(state.iteration)
+        return len(calls) > 9  # the main run shows its states 0 to 8
+
+    result = run(problem, iterations=8, levels=False, callback=stop_after_the_main_run)
+    assert "close dots spread" in result.message and result.status == "stopped"
+    assert len(calls) == 10  # the main run's nine states, then the spread step's first: nothing after it
