@@ -17,6 +17,7 @@ def check_integer(name, value, low, high, *, even=False):
 def check_positive(name, value, allow_none=False):
     if value is None and allow_none:
         return None
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
+    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not real or not np.isfinite(value) or value <= 0:
         raise StippleError(f"{name} must be a positive number, not {value!r}")
     return value

@@ -130,9 +130,9 @@ def check_memory(needed, what):
         )
 
 
-def check_epsilon(epsilon):
-    if not isinstance(epsilon, (int, float, np.floating)) or not 1e-14 <= epsilon <= 1e-2:
-        raise StippleError(f"epsilon must be a number in [1e-14, 1e-2], not {epsilon!r}")
+def check_epsilon(epsilon, name="epsilon"):
+    if not isinstance(epsilon, (int, float, np.floating)) or isinstance(epsilon, bool) or not 1e-14 <= epsilon <= 1e-2:
+        raise StippleError(f"{name} must be a number in [1e-14, 1e-2], not {epsilon!r}")
     return float(epsilon)
 
 
@@ -160,7 +160,9 @@ def check_run_options(
     check_positive("checkpoint_seconds", checkpoint_seconds, allow_none=True)
     if checkpoint_iterations is not None:
         check_integer("checkpoint_iterations", checkpoint_iterations, 1, 10**9)
-    if settle is not None and (not isinstance(settle, (int, float)) or not 0 <= settle < 1):
+    if settle is not None and (
+        not isinstance(settle, (int, float, np.floating)) or isinstance(settle, bool) or not 0 <= settle < 1
+    ):
         raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
     check_integer("iterations", iterations, 0, 10**9)
     if beta not in BETAS:
@@ -251,6 +253,8 @@ def run(
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
+    if callback is not None and not callable(callback):
+        raise StippleError(f"callback must be a function of the CG state, not {callback!r}")
     settle = problem.settle if settle is None else settle
     check_run_options(
         tol=tol,

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from .errors import StippleError
 from .parallel import map_blocks, map_terms, sum_blocks
 
 
@@ -40,9 +41,9 @@ class Discrepancy:
 
     def __init__(self, fourier, kernel, target, weight, hessian="gauss-newton", cross_kernel=None):
         if hessian not in ("gauss-newton", "full"):
-            raise ValueError(f"hessian must be 'gauss-newton' or 'full', not {hessian!r}")
+            raise StippleError(f"hessian must be 'gauss-newton' or 'full', not {hessian!r}")
         if hessian == "full" and not hasattr(fourier, "hessian_synthesis"):
-            raise ValueError("hessian='full' is only available on the torus")
+            raise StippleError("hessian='full' is only available on the torus")
         self.fourier = fourier
         # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
         self.threads = getattr(fourier, "threads", 1)

@@ -48,7 +48,7 @@ def derivative_accuracy(epsilon, derivative_epsilon=None):
     ``epsilon``."""
     if derivative_epsilon is None:
         return epsilon
-    return max(check_epsilon(derivative_epsilon), epsilon)
+    return max(check_epsilon(derivative_epsilon, "derivative_epsilon"), epsilon)
 
 
 # The paper's Fig. 5.1 (M = 30150, N = 650 on a square): N = 4.02 / (hexagonal spacing of M dots).

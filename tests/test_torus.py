@@ -309,3 +309,26 @@ def test_a_stop_asked_in_the_spread_step_stops_the_run():
     result = run(problem, iterations=8, levels=False, callback=stop_after_the_main_run)
     assert "close dots spread" in result.message and result.status == "stopped"
     assert len(calls) == 10  # the main run's nine states, then the spread step's first: nothing after it
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda p: run(p, iterations=1, tol=True), "tol must be a positive number"),
+        (lambda p: run(p, iterations=1, time_limit=1 + 0j), "time_limit must be a positive number"),
+        (lambda p: run(p, iterations=1, settle=np.float32(0.001)), None),
+        (lambda p: run(p, iterations=1, callback=5), "callback must be a function"),
+        (lambda p: torus_problem(np.ones((8, 8)), 20, 8, derivative_epsilon=0.5), "derivative_epsilon must be"),
+        (lambda p: torus_problem(np.ones((8, 8)), 20, 8, hessian="bogus"), "hessian must be"),
+    ],
+)
+def test_odd_types_of_settings_are_checked_alike(make, message):
+    """True and complex numbers passed as tol and time_limit, np.float32 was refused for settle, callback=5 failed
+    at its first call, a bad derivative_epsilon was named epsilon, a bad hessian was a plain ValueError (a
+    hostile review of the API)."""
+    problem = torus_problem(np.ones((8, 8)), 20, 8)
+    if message is None:
+        make(problem)
+        return
+    with pytest.raises(StippleError, match=message):
+        make(problem)
