@@ -17,7 +17,7 @@ are the start there.
 import numpy as np
 
 from .errors import StippleError
-from .halftone import MAX_BANDWIDTH, check_integer, run
+from .halftone import MAX_BANDWIDTH, MAX_POINTS, check_integer, run
 from .sphere import sphere_problem, unit_vectors
 
 DESIGN_KERNEL = "sobolev:1"
@@ -109,6 +109,11 @@ def start_points(strength, n_points, init="auto", seed=0):
 def design_problem(strength, n_points=None, *, threads=None, epsilon=DESIGN_EPSILON):
     """The ``Problem`` of a design of strength t with ``n_points`` points (default ``design_points(t)``)."""
     strength = check_strength(strength)
+    if n_points is None and design_points(strength) > MAX_POINTS:  # the count no one gave would be blamed
+        raise StippleError(
+            f"strength {strength} asks for {design_points(strength)} points by default, more than {MAX_POINTS}: "
+            "give a smaller strength"
+        )
     n_points = design_points(strength) if n_points is None else n_points
     fewest = -(-((strength + 1) ** 2) // 4)  # (t+1)^2/4 rounded up: t = 2 needs 3 points, not 2
     if isinstance(n_points, (int, np.integer)) and 0 < n_points < fewest:
@@ -165,9 +170,15 @@ def spherical_design(
     """
     if not isinstance(error, (int, float)) or not 0 < error < 1:
         raise StippleError(f"error must be a number in (0, 1), not {error!r}")
+    if "tol" in options:
+        raise StippleError("a design stops by its error (error=), not by tol")
     problem = design_problem(strength, n_points, threads=threads, epsilon=epsilon)
     target = ErrorTarget(problem.discrepancy, error)
-    chained = target if callback is None else lambda state: target(state) or bool(callback(state))
+
+    def chained(state):
+        stop = callback is not None and bool(callback(state))  # shown every iteration, the last one too
+        return target(state) or stop
+
     options.setdefault("iterations", 20000)
     init = start_points(strength, problem.n_points, init, seed)
     result = run(problem, init=init, seed=seed, tol=GRADIENT_FLOOR, callback=chained, **options)

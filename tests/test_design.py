@@ -202,3 +202,19 @@ def test_a_stall_above_the_gradient_floor_is_found_by_the_energy():
     iterations (8 s) before saying it reached them (a held-out review)."""
     result = spherical_design(3, 5, threads=1)
     assert result.status == "stalled" and "local minimum" in result.message and result.iterations < 1000
+
+
+def test_design_settings_a_caller_gets_wrong_are_named():
+    """strength 8192 blamed a count of 36918887 points that no one gave; tol= was a TypeError 'multiple values'
+    (a hostile review of the API)."""
+    with pytest.raises(StippleError, match="strength 8192 asks for 36918887 points by default"):
+        spherical_design(8192)
+    with pytest.raises(StippleError, match="a design stops by its error"):
+        spherical_design(2, tol=1e-3)
+
+
+def test_the_callback_sees_the_last_iteration():
+    """The error target's stop short-circuited the caller's callback: it never saw the last iteration."""
+    seen = []
+    result = spherical_design(3, callback=lambda state: seen.append(state.iteration), threads=1)
+    assert result.status == "converged" and seen[-1] == result.iterations
