@@ -1,11 +1,13 @@
 """Image and map loading: formats, bit depths, alpha, orientation, density conventions."""
 
 import io
+import re
 
 import numpy as np
 import pytest
 from PIL import Image
 
+from stipple.errors import StippleError
 from stipple.io.images import load_density
 
 
@@ -111,3 +113,25 @@ def test_range_and_levels_are_refused_where_they_would_be_ignored(tmp_path):
     assert np.all(load_density(tmp_path / "m.npy", value_range=(100.0, 200.0), invert=True) == 1.0)
     with pytest.raises(StippleError, match="blank under --invert"):
         load_density(tmp_path / "m.npy", value_range=(-10.0, -5.0), invert=True)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"value_range": 5}, "range must be two numbers LO HI, not 5"),
+        ({"value_range": (1, 2, 3)}, "range must be two numbers LO HI"),
+        ({"value_range": ("a", "b")}, "range must be two numbers LO HI"),
+        ({"levels": (0.1, 0.5, 0.9)}, "levels must be two numbers BLACK,WHITE"),
+        ({"levels": "bogus"}, "levels must be 'auto' or BLACK,WHITE"),
+        ({"gamma": "2"}, "gamma must be a positive number"),
+    ],
+)
+def test_load_density_names_a_setting_of_the_wrong_shape_or_type(tmp_path, options, message):
+    """Each failed in Python's words (unpacking, float(), a comparison of str and int; a hostile review)."""
+    path = tmp_path / ("map.npy" if "value_range" in options else "gray.png")
+    if "value_range" in options:
+        np.save(path, np.arange(12.0).reshape(3, 4))
+    else:
+        Image.fromarray(np.arange(12, dtype=np.uint8).reshape(3, 4) * 20).save(path)
+    with pytest.raises(StippleError, match=re.escape(message)):
+        load_density(path, **options)

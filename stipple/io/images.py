@@ -144,9 +144,19 @@ def check_grid(values, name="input"):
     return values
 
 
+def two_numbers(pair, name, form):
+    """``pair`` as two floats, or a StippleError naming ``name`` and its ``form`` (5, (1, 2, 3) and ("a", "b")
+    failed in Python's words)."""
+    try:
+        first, second = (float(value) for value in pair)
+    except (TypeError, ValueError):
+        raise StippleError(f"{name} must be two numbers {form}, not {pair!r}") from None
+    return first, second
+
+
 def check_range(value_range):
     """``(LO, HI)`` as floats if both are finite and ``LO < HI``."""
-    low, high = (float(value) for value in value_range)
+    low, high = two_numbers(value_range, "range", "LO HI")
     if not (np.isfinite(low) and np.isfinite(high) and low < high):
         raise StippleError(f"range must be two finite numbers LO HI with LO < HI, not {low:g} {high:g}")
     return low, high
@@ -272,7 +282,9 @@ def check_levels(levels):
     """``levels`` (None, "auto" or ``(black, white)`` with ``0 <= black < white <= 1``), checked."""
     if levels is None or levels == "auto":
         return levels
-    black, white = (float(value) for value in levels)
+    if isinstance(levels, str):
+        raise StippleError(f"levels must be 'auto' or BLACK,WHITE, not {levels!r}")
+    black, white = two_numbers(levels, "levels", "BLACK,WHITE")
     if not (np.isfinite(black) and np.isfinite(white) and 0 <= black < white <= 1):
         raise StippleError(f"levels must be BLACK,WHITE with 0 <= BLACK < WHITE <= 1, not {black:g},{white:g}")
     return black, white
@@ -320,7 +332,8 @@ def image_density(image, *, invert=False, gamma=1.0, levels=None, name="input"):
 
 
 def _check_gamma(gamma):
-    if not gamma > 0 or not np.isfinite(gamma):
+    real = isinstance(gamma, (int, float, np.integer, np.floating)) and not isinstance(gamma, bool)
+    if not real or not gamma > 0 or not np.isfinite(gamma):
         raise StippleError(f"gamma must be a positive number, not {gamma}")
 
 
