@@ -269,6 +269,8 @@ def run(
     )
     saver = None
     if checkpoint is not None:
+        if not isinstance(checkpoint, (str, os.PathLike)) or os.path.isdir(checkpoint):
+            raise StippleError(f"checkpoint must be the path of a file, not {checkpoint!r}")
         if not resume and os.path.exists(checkpoint):
             raise StippleError(f"{checkpoint}: checkpoint exists; resume it or remove it first")
         saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)

@@ -202,6 +202,8 @@ def sphere_problem(
     density = unit_peak(as_density(weights, check_lon0(lon0)))
     n_points = check_count(n_points)
     kernel = default_kernel(density, n_points) if kernel is None else kernel
+    if not isinstance(kernel, str):
+        raise StippleError(f"kernel must be a name such as 'distance' or 'sobolev:1', not {kernel!r}")
     near_field = kernel.startswith("distance") if near_field is None else bool(near_field)
     if near_field and not kernel.startswith("distance"):
         raise StippleError(f"the near field needs the distance kernel, not {kernel!r}")

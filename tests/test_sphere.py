@@ -461,3 +461,9 @@ def test_a_density_function_must_return_one_real_number_per_point(function):
     """A number, a short array or complex values failed deep inside numpy or ducc0."""
     with pytest.raises(StippleError, match="the density function must return one real number per point"):
         sphere_problem(function, 50)
+
+
+def test_a_kernel_that_is_not_a_name_is_refused():
+    """kernel=5 failed with "'int' object has no attribute 'startswith'"."""
+    with pytest.raises(StippleError, match="kernel must be a name such as 'distance'"):
+        sphere_problem(None, 50, kernel=5)

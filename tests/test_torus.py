@@ -332,3 +332,12 @@ def test_odd_types_of_settings_are_checked_alike(make, message):
         return
     with pytest.raises(StippleError, match=message):
         make(problem)
+
+
+@pytest.mark.parametrize("checkpoint", [5, b"x.npz", "folder"])
+def test_a_checkpoint_that_is_not_a_file_path_is_refused(tmp_path, monkeypatch, checkpoint):
+    """5 and bytes failed in os's and tempfile's words; a folder was called an existing checkpoint."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(StippleError, match="checkpoint must be the path of a file"):
+        run(torus_problem(np.ones((8, 8)), 20, 8), iterations=1, checkpoint=checkpoint)
