@@ -1,5 +1,7 @@
 """Checks of numbers where they enter the library: each error names the parameter and the values it allows."""
 
+import os
+
 import numpy as np
 
 from .errors import StippleError
@@ -21,3 +23,12 @@ def check_positive(name, value, allow_none=False):
     if not real or not np.isfinite(value) or value <= 0:
         raise StippleError(f"{name} must be a positive number, not {value!r}")
     return value
+
+
+def check_hooks(callback, checkpoint):
+    """Raise unless ``callback`` is callable (or None) and ``checkpoint`` a file's path (or None): 5 failed at
+    the first call, a number or bytes as a checkpoint in os's words, and a folder was "an existing checkpoint"."""
+    if callback is not None and not callable(callback):
+        raise StippleError(f"callback must be a function of the CG state, not {callback!r}")
+    if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or os.path.isdir(checkpoint)):
+        raise StippleError(f"checkpoint must be the path of a file, not {checkpoint!r}")

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from . import allocator
-from .checks import check_integer, check_positive
+from .checks import check_hooks, check_integer, check_positive
 from .errors import StippleError
 from .multilevel import coarse_to_fine
 from .optimize import BETAS, OptimizeResult, initial_state, minimize, time_left
@@ -253,8 +253,7 @@ def run(
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
-    if callback is not None and not callable(callback):
-        raise StippleError(f"callback must be a function of the CG state, not {callback!r}")
+    check_hooks(callback, checkpoint)
     settle = problem.settle if settle is None else settle
     check_run_options(
         tol=tol,
@@ -269,8 +268,6 @@ def run(
     )
     saver = None
     if checkpoint is not None:
-        if not isinstance(checkpoint, (str, os.PathLike)) or os.path.isdir(checkpoint):
-            raise StippleError(f"checkpoint must be the path of a file, not {checkpoint!r}")
         if not resume and os.path.exists(checkpoint):
             raise StippleError(f"{checkpoint}: checkpoint exists; resume it or remove it first")
         saver = Checkpointer(checkpoint, problem, seconds=checkpoint_seconds, iterations=checkpoint_iterations)
