@@ -346,16 +346,19 @@ def _sum_of_squares(components):
 
 
 # What a candidate pair costs (its indices, its block's arrays, the temporaries): 4000 coincident dots, 8.0 million
-# pairs, raised stipple evaluate's peak by 0.94 GB (118 bytes a pair). PAIR_SAMPLE points estimate the pairs.
-PAIR_BYTES, PAIR_SAMPLE = 150, 1000
+# pairs, raised stipple evaluate's peak by 0.94 GB (118 bytes a pair). PAIR_SAMPLE points, or one in
+# PAIR_SAMPLE_EVERY where there are more, estimate the pairs: a clump that cannot fit (about 16000 coincident
+# points in 20 GiB) then holds at least four of them however many points there are.
+PAIR_BYTES, PAIR_SAMPLE, PAIR_SAMPLE_EVERY = 150, 1000, 4000
 
 
 def check_pair_memory(tree, positions, reach):
     """Refuse ``positions`` so clumped that their pairs within ``reach`` would not fit in the memory available,
-    estimated from the neighbours of ``PAIR_SAMPLE`` evenly chosen points (``tree`` holds ``positions``). 40000
+    estimated from the neighbours of evenly chosen points (``tree`` holds ``positions``). 40000
     coincident dots given to ``stipple evaluate`` asked for 800 million pairs, and the kernel's OOM killer ended
     the process after a minute."""
-    sample = positions[np.linspace(0, len(positions) - 1, min(len(positions), PAIR_SAMPLE)).astype(np.intp)]
+    count = min(len(positions), max(PAIR_SAMPLE, len(positions) // PAIR_SAMPLE_EVERY))
+    sample = positions[np.linspace(0, len(positions) - 1, count).astype(np.intp)]
     neighbours = np.asarray(tree.query_ball_point(sample, reach, return_length=True)) - 1
     pairs = float(neighbours.mean()) * len(positions) / 2
     available = allocator.available_memory()

@@ -314,3 +314,20 @@ def test_clumped_points_are_refused_before_their_pairs_fill_the_memory(monkeypat
     spread = np.random.default_rng(0).random((4000, 2))  # about 1.3 neighbours each within 0.01: a few kB
     monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 2**20)
     check_pair_memory(TorusPairs(np.ones(2)).tree(spread), spread, 0.01)
+
+
+def test_a_clump_between_the_sampled_points_is_found(monkeypatch):
+    """An evenly spaced sample of 1000 points missed a clump of contiguous rows shorter than its spacing (a code
+    review); one point in PAIR_SAMPLE_EVERY is sampled where that is more (here 50, for a clump of 100 rows)."""
+    import stipple.allocator
+    import stipple.nearfield
+    from stipple.errors import StippleError
+    from stipple.nearfield import check_pair_memory
+
+    points = np.random.default_rng(0).random((200_100, 2))
+    points[50:150] = 0.25  # between the 1000-point sample's rows 0 and 200: 4950 pairs, about 0.7 MB
+    monkeypatch.setattr(stipple.allocator, "available_memory", lambda: 0.5 * 2**20)
+    monkeypatch.setattr(stipple.nearfield, "PAIR_SAMPLE_EVERY", 50)
+    tree = TorusPairs(np.ones(2)).tree(points)
+    with pytest.raises(StippleError, match="the points are clumped"):
+        check_pair_memory(tree, points, 1e-4)
