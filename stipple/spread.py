@@ -84,7 +84,12 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
 
     def nearest(vectors):
         chord, neighbour = cKDTree(vectors).query(vectors, k=2)
-        return 2 * np.arcsin(np.minimum(chord[:, 1] / 2, 1.0)), neighbour[:, 1]
+        # A dot without a neighbour (M = 1) keeps its infinite distance: clamped to pi, it was "close" to the
+        # missing neighbour, and stipple sphere -M 1 ended in an IndexError (a hostile review).
+        with np.errstate(invalid="ignore"):
+            return np.where(
+                np.isfinite(chord[:, 1]), 2 * np.arcsin(np.minimum(chord[:, 1] / 2, 1.0)), np.inf
+            ), neighbour[:, 1]
 
     sphere = Sphere()
 

@@ -374,6 +374,14 @@ def test_one_dot_and_a_subnormal_map_print_no_python_warnings(grad, tmp_path):
     tiny = tmp_path / "tiny.npy"
     np.save(tiny, np.array([[0.0, 5e-324], [5e-324, 0.0]]))
     one_line(stipple("sphere", tiny, "-M", "10", "-o", tmp_path / "x.csv"), 1, "tiny.npy: the values span")
+    # The sphere's one dot: its missing neighbour's index was used (an IndexError traceback); a --range of a
+    # subnormal span overflowed the map's other values (a RuntimeWarning line; a hostile review).
+    sphere = stipple("sphere", "builtin:gaussians", "-M", "1", "-q", "-o", tmp_path / "s.csv")
+    assert sphere.returncode == 0 and sphere.stderr == "", sphere.stderr
+    ordinary = tmp_path / "ordinary.npy"
+    np.save(ordinary, np.random.default_rng(0).random((18, 36)))
+    narrow = stipple("sphere", ordinary, "-M", "10", "--range", "0", "1e-310", "-q", "-o", tmp_path / "n.csv")
+    assert narrow.returncode == 0 and narrow.stderr == "", narrow.stderr
 
 
 def test_a_colour_image_on_stdin(tmp_path):

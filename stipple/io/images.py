@@ -177,7 +177,9 @@ def rescale(values, value_range=None, name="input"):
     span = high / 2 - low / 2
     if not span > 0:
         raise StippleError(f"{name}: the values span {high - low:g}, too little to rescale; give --range LO HI")
-    return np.clip((values / 2 - low / 2) / span, 0.0, 1.0)
+    # Values far outside a tiny span overflow to +-inf, which the clip sends to 0 or 1 (not a warning line).
+    with np.errstate(over="ignore"):
+        return np.clip((values / 2 - low / 2) / span, 0.0, 1.0)
 
 
 def load_density(source, *, invert=False, gamma=1.0, value_range=None, levels=None, name=None, strict=True):
