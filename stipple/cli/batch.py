@@ -95,7 +95,7 @@ batch.params.extend(torus_params())
 
 def plan(inputs, options):
     """The batch's jobs, every option, file and output checked before any work; makes the output folder."""
-    from ..batch import cluster_client, expand_images, is_done, parse_formats, plan_batch, scheduler_address
+    from ..batch import cluster_client, expand_images, is_done, parse_formats, plan_batch, probe, scheduler_address
     from ..halftone import check_integer
     from ..pipelines.image import check_recipe
 
@@ -106,8 +106,9 @@ def plan(inputs, options):
         raise StippleError("--order progressive is for stipple torus, one image at a time; use --order here")
     formats = parse_formats(options["formats"])
     if options["scheduler"] is not None:
-        scheduler_address(options["scheduler"])
+        _, host, port = scheduler_address(options["scheduler"])
         cluster_client()
+        probe(options["scheduler"], host, port)  # an unreachable one left the -d folder made (a hostile review)
     recipe = torus_recipe(options)
     # A folder may mix images and .npy maps: --range is the maps', --levels the images'.
     recipe = replace(recipe, load={**recipe.load, "strict": False})
