@@ -130,6 +130,9 @@ def test_decompression_bomb(files, monkeypatch):
         (["--threads", "0"], "threads must be an integer"),
         (["--epsilon", "1e-20"], "epsilon must be a number"),
         (["--checkpoint-every", "soon"], "checkpoint-every must be like"),
+        # Named as the library's checkpoint_iterations, the count echoed changed through a float (a hostile review)
+        (["--checkpoint-every", "99999999999999999999999"], "checkpoint-every must be a whole number of iterations up"),
+        (["--checkpoint-every", "9" * 400 + "s"], "checkpoint-every must be a finite time"),
         (["--dot-radius", "-1mm"], "dot-radius must be a length (mm"),
     ],
 )

@@ -2,6 +2,7 @@
 before any work, the outputs committed all-or-nothing, and the summary and exit status at the end."""
 
 import contextlib
+import math
 import os
 import re
 import shlex
@@ -132,10 +133,19 @@ def parse_every(text):
         raise StippleError(f"checkpoint-every must be like 60s, 5m or 100 (iterations), not {text!r}")
     value, unit = float(match.group(1)), match.group(2) or "it"
     if unit == "it":
-        if value != int(value):
-            raise StippleError(f"checkpoint-every must be a whole number of iterations, not {text!r}")
+        if value != int(value) or value > MAX_EVERY_ITERATIONS:
+            raise StippleError(
+                f"checkpoint-every must be a whole number of iterations up to {MAX_EVERY_ITERATIONS}, not {text!r}"
+            )
         return None, int(value)
-    return value * {"s": 1, "m": 60, "h": 3600}[unit], None
+    seconds = value * {"s": 1, "m": 60, "h": 3600}[unit]
+    if not math.isfinite(seconds):
+        raise StippleError(f"checkpoint-every must be a finite time, not {text!r}")
+    return seconds, None
+
+
+# The library's bound on checkpoint_iterations (a larger count went through a float and was echoed changed).
+MAX_EVERY_ITERATIONS = 10**9
 
 
 @contextlib.contextmanager
