@@ -176,6 +176,7 @@ def test_an_output_naming_an_input_is_refused(images):
         (["--init", "dots.csv"], "--init for a batch"),
         (["--seed", "-1"], "seed"),
         (["--scheduler", "tcp://127.0.0.1:1"], "cannot reach the Dask scheduler"),
+        (["-d", ""], "-d: an empty folder name"),
     ],
 )
 def test_bad_settings_get_one_line_before_any_work(images, tmp_path, monkeypatch, args, message):

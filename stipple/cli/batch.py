@@ -114,6 +114,8 @@ def plan(inputs, options):
     recipe = replace(recipe, load={**recipe.load, "strict": False})
     check_recipe(recipe)
     out_dir = options["out_dir"]
+    if not str(out_dir).strip():  # it said "Error: : cannot make the output folder"
+        raise StippleError("-d: an empty folder name (an unset shell variable?)")
     jobs = plan_batch(expand_images(inputs), out_dir, formats, recipe)
     try:
         os.makedirs(out_dir, exist_ok=True)
