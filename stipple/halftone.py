@@ -181,10 +181,11 @@ def initial_points(problem, init, rng):
         return problem.manifold.random(rng, problem.n_points)
     points = np.asarray(init)
     expected = (problem.n_points, problem.manifold.dimension)
-    if points.shape != expected or points.dtype.kind not in "biuf":
-        raise StippleError(
-            f"initial points must be real numbers of shape {expected}, not {points.dtype} {points.shape}"
-        )
+    if points.dtype.kind not in "biuf":
+        raise StippleError(f"initial points must be real numbers, not {points.dtype}")
+    if points.shape != expected:
+        given = f"{points.shape[0]} of {points.shape[1]}" if points.ndim == 2 else f"an array of shape {points.shape}"
+        raise StippleError(f"initial points must be M = {expected[0]} points of {expected[1]} coordinates, not {given}")
     points = points.astype(np.float64)
     if not np.all(np.isfinite(points)) or (problem.domain == "sphere" and np.any(np.all(points == 0, axis=1))):
         raise StippleError("initial points contain NaN, infinite or (on the sphere) zero vectors")

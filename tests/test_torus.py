@@ -341,3 +341,18 @@ def test_a_checkpoint_that_is_not_a_file_path_is_refused(tmp_path, monkeypatch, 
     (tmp_path / "folder").mkdir()
     with pytest.raises(StippleError, match="checkpoint must be the path of a file"):
         run(torus_problem(np.ones((8, 8)), 20, 8), iterations=1, checkpoint=checkpoint)
+
+
+@pytest.mark.parametrize(
+    "init, message",
+    [
+        (np.zeros((30, 2)), "initial points must be M = 20 points of 2 coordinates, not 30 of 2"),
+        (np.zeros(40), r"not an array of shape \(40,\)"),
+        (np.zeros((20, 2)) + 0j, "initial points must be real numbers, not complex128"),
+    ],
+)
+def test_a_start_of_the_wrong_count_names_m(init, message):
+    """A --init CSV of 30150 points for -M 300 said 'must be real numbers of shape (300, 2)', which named neither
+    the count nor M (a hostile review)."""
+    with pytest.raises(StippleError, match=message):
+        run(torus_problem(np.ones((8, 8)), 20, 8), init=init, iterations=1)
