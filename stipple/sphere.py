@@ -401,7 +401,12 @@ def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_rang
             raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
         _refuse_transfer(source, invert, gamma, value_range)
         return BUILTINS[name]
-    return CellMap(load_input(source, invert=invert, gamma=gamma, value_range=value_range), lon0)
+    values = load_input(source, invert=invert, gamma=gamma, value_range=value_range)
+    if not np.any(values > 0):  # named as the map's file, not "map" (an all-clear PNG; a hostile review)
+        raise StippleError(
+            f"{source}: the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
+        )
+    return CellMap(values, lon0)
 
 
 def _refuse_transfer(what, invert, gamma, value_range):

@@ -260,3 +260,14 @@ def test_the_equirect_map_wraps_at_its_left_and_right_edges(tmp_path):
     interior = gray[:, 20:-20].mean()
     edges = np.concatenate([gray[:, :3].mean(axis=0), gray[:, -3:].mean(axis=0)])
     assert np.abs(edges - interior).max() < 25, (edges, interior)
+
+
+def test_a_blank_image_as_a_map_is_named(tmp_path):
+    """An all-clear PNG said 'map: density is zero everywhere', not its file's name (a hostile review)."""
+    from PIL import Image
+
+    Image.new("RGBA", (36, 18), (0, 0, 0, 0)).save(tmp_path / "clear.png")
+    result = CliRunner().invoke(
+        main, ["sphere", str(tmp_path / "clear.png"), "-M", "20", "-q", "-o", str(tmp_path / "a.csv")]
+    )
+    assert result.exit_code == 1 and "clear.png: the image is blank (all white)" in result.output

@@ -344,7 +344,8 @@ def _transfer(values, invert, gamma):
     density = 1.0 - values if invert else values
     if invert and not np.any(density > 0):
         raise StippleError(
-            "the image is blank under --invert (all black): --invert places dots on its light parts, and it has none"
+            "the input is blank under --invert (an image all black, a map at its top everywhere): --invert places "
+            "dots on its light parts, and it has none"
         )
     return density**gamma if gamma != 1.0 else density
 
