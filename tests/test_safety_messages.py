@@ -79,7 +79,14 @@ def test_float_tiffs_are_rescaled_like_integer_images(scale):
     assert np.allclose(load_density(tiff_bytes(levels * scale)), 1 - levels, atol=1e-6)
 
 
-@pytest.mark.parametrize("values,shown", [([[-1.0, 0.5], [0.2, 0.1]], "[-1, 0.5]"), ([[1e6, 0], [0, 1]], "1e+06")])
+@pytest.mark.parametrize(
+    "values,shown",
+    [
+        ([[-1.0, 0.5], [0.2, 0.1]], "[-1, 0.5]"),
+        ([[1e6, 0], [0, 1]], "1e+06"),
+        ([[-5.0, -5.0], [-5.0, -5.0]], "not [-5, -5]"),  # "[-5, 0]": a range the image does not have
+    ],
+)
 def test_float_tiffs_out_of_range_are_refused(folder, values, shown):
     (folder / "f.tiff").write_bytes(tiff_bytes(np.array(values)).getvalue())
     refused(run_torus(folder, "f.tiff"), folder, "float image values must lie in [0, 1], [0, 255] or [0, 65535]")

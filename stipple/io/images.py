@@ -72,8 +72,9 @@ def _float_gray(values, name):
     """A float image's values in [0, 1]; images stored as 0..255 or 0..65535 are rescaled like integer ones."""
     if not np.all(np.isfinite(values)):
         raise StippleError(f"{name}: image contains NaN or infinite values")
-    low, high = values.min(initial=0.0), values.max(initial=0.0)
-    scale = next((scale for scale in _FLOAT_SCALES if high <= scale), None)
+    # The values' own range in the message: a float image of -5 everywhere was "not [-5, 0]".
+    low, high = (values.min(), values.max()) if values.size else (0.0, 0.0)
+    scale = next((scale for scale in _FLOAT_SCALES if max(high, 0.0) <= scale), None)
     if low < 0 or scale is None:
         raise StippleError(
             f"{name}: float image values must lie in [0, 1], [0, 255] or [0, 65535], not [{low:g}, {high:g}]"
