@@ -387,3 +387,12 @@ def test_a_colour_resume_names_the_colour_option_changed(files, first, then, nam
     base = ["torus", files[1], "-M", 60, "-N", 8, "--iterations", 2, "-q", "-o", files[2], "--checkpoint", path]
     assert CliRunner().invoke(main, [str(a) for a in base + first]).exit_code == 0
     assert named in invoke(base + ["--resume", *then])
+
+
+def test_a_call_in_an_npy_header_is_named_not_shown_as_an_address(files):
+    """A header holding a call printed '<ast.Call object at 0x7f...>' (a hostile review)."""
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': f(3, 4), }"
+    header += " " * (-(len(header) + 11) % 64) + "\n"
+    data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(96)
+    text = invoke(["torus", write(files[0] / "call.npy", data), "-M", 30, "-q", "-o", files[2]])
+    assert "corrupt or truncated .npy" in text and "a Python Call expression" in text and " at 0x" not in text

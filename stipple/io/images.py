@@ -2,6 +2,7 @@
 
 import io
 import math
+import re
 import warnings
 
 import numpy as np
@@ -126,6 +127,7 @@ def _npy_header(data, name):
         if isinstance(error, StippleError):
             raise
         reason = " ".join(str(error).split())  # numpy's message quotes the header: a line of 6 KB for a deep one
+        reason = re.sub(r"<ast\.(\w+) object at 0x[0-9a-fA-F]+>", r"a Python \1 expression", reason)  # not an address
         reason = reason if len(reason) <= 200 else reason[:197] + "..."
         raise StippleError(f"{name}: corrupt or truncated .npy file ({reason})") from None
     if any(size < 0 for size in shape):
