@@ -70,6 +70,10 @@ def test_command_line_overrides_config(setup):
         ("backend = 'fftw'", "key 'backend'"),
         ("uniform = true", "unknown key 'uniform'"),
         ("palette = ['#ff0000', '#000000']", "expected one value, not a list"),
+        # Numbers written as text passed (docs/errors.md says numbers; a hostile review).
+        ("points = '100'", "bad.toml: expected a number, not the text '100'"),
+        ("gamma = '2'", "bad.toml: expected a number, not the text '2'"),
+        ("range = ['0', '1']", "bad.toml: expected a number, not the text '0'"),
     ],
 )
 def test_config_errors_name_the_key(setup, line, message):

@@ -77,6 +77,9 @@ def _convert(parameter, item, where, ctx, param):
     """``item`` converted by the option's own type; floats for integer options and non-finite numbers refused."""
     expects_integer = isinstance(parameter.type, click.types.IntParamType)
     for number in item if isinstance(item, list) else [item]:
+        if isinstance(number, str) and _numeric(parameter.type) and _number_text(number):
+            # points = "100" passed (docs/errors.md: numbers, not text); a word such as "auto" is the type's to judge
+            raise click.BadParameter(f"{where}: expected a number, not the text {number!r}", ctx, param)
         if isinstance(number, float) and (expects_integer or not math.isfinite(number)):
             kind = "an integer" if expects_integer else "a finite number"
             raise click.BadParameter(f"{where}: expected {kind}, not {number!r}", ctx, param)
@@ -86,6 +89,22 @@ def _convert(parameter, item, where, ctx, param):
         raise click.BadParameter(f"{where}: {error.message}", ctx, param) from None
     except (TypeError, ValueError, OverflowError) as error:
         raise click.BadParameter(f"{where}: {error}", ctx, param) from None
+
+
+def _number_text(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _numeric(kind):
+    """Whether an option's type takes numbers only (a tuple's: all its members)."""
+    numbers = (click.types.IntParamType, click.types.FloatParamType)
+    if isinstance(kind, click.Tuple):
+        return all(isinstance(member, numbers) for member in kind.types)
+    return isinstance(kind, numbers)
 
 
 def _resolve_paths(base, value):
