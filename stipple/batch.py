@@ -89,9 +89,9 @@ def plan_batch(images, out_dir, formats, recipe):
     Raises
     ------
     StippleError
-        If an image is stdin or a directory, two images share a stem (compared ignoring case, since they would
-        write the same files on a case-insensitive file system), or an output would overwrite an image. The same
-        file given twice (two names, overlapping globs) is one job.
+        If an image is stdin, a directory or not a regular file, two images share a stem (compared ignoring
+        case, since they would write the same files on a case-insensitive file system), or an output would
+        overwrite an image. The same file given twice (two names, overlapping globs) is one job.
     """
     jobs, stems, seen = [], {}, set()
     for image in images:
@@ -99,6 +99,9 @@ def plan_batch(images, out_dir, formats, recipe):
             raise StippleError("batch reads image files, not stdin ('-')")
         if os.path.isdir(image):
             raise StippleError(f"{image}: is a directory; give its images (e.g. {os.path.join(image, '*.png')})")
+        if os.path.exists(image) and not os.path.isfile(image):
+            # A pipe among a shell glob's names waited for a writer, and the whole batch with it (a hostile review).
+            raise StippleError(f"{image}: not a regular file (a pipe or a device); a batch reads image files")
         if _identity(image) in seen:  # the same file twice (overlapping globs): stippled once
             continue
         seen.add(_identity(image))

@@ -334,3 +334,15 @@ def test_batch_neither_offers_nor_takes_an_automatic_count(tmp_path):
     result = CliRunner().invoke(main, ["batch", str(tmp_path / "a.png"), "-d", str(tmp_path / "out"), "-M", "auto"])
     assert result.exit_code == 2 and "'auto' is not a valid integer" in result.output
     assert not (tmp_path / "out").exists()
+
+
+def test_a_pipe_among_the_images_is_refused_before_any_work(images, tmp_path):
+    """A FIFO among a shell glob's names waited for a writer, and the whole batch with it (a hostile review)."""
+    import subprocess
+
+    os.mkfifo(tmp_path / "pipe.png")
+    command = [sys.executable, "-m", "stipple", "batch", *map(str, images), str(tmp_path / "pipe.png")]
+    command += ["-d", str(tmp_path / "out"), *map(str, SMALL), "-q"]
+    result = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 1 and "pipe.png: not a regular file" in result.stderr, result.stderr
+    assert not (tmp_path / "out").exists()
