@@ -16,11 +16,15 @@ def check_integer(name, value, low, high, *, even=False):
     return int(value)
 
 
+def is_real(value):
+    """Whether ``value`` is one real number (Python's or numpy's; not a bool, a complex number or a string)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
 def check_positive(name, value, allow_none=False):
     if value is None and allow_none:
         return None
-    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if not real or not np.isfinite(value) or value <= 0:
+    if not is_real(value) or not np.isfinite(value) or value <= 0:
         raise StippleError(f"{name} must be a positive number, not {value!r}")
     return value
 

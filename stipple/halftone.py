@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from . import allocator
-from .checks import check_hooks, check_integer, check_positive
+from .checks import check_hooks, check_integer, check_positive, is_real
 from .errors import StippleError
 from .multilevel import coarse_to_fine
 from .optimize import BETAS, OptimizeResult, initial_state, minimize, time_left
@@ -131,7 +131,7 @@ def check_memory(needed, what):
 
 
 def check_epsilon(epsilon, name="epsilon"):
-    if not isinstance(epsilon, (int, float, np.floating)) or isinstance(epsilon, bool) or not 1e-14 <= epsilon <= 1e-2:
+    if not is_real(epsilon) or not 1e-14 <= epsilon <= 1e-2:
         raise StippleError(f"{name} must be a number in [1e-14, 1e-2], not {epsilon!r}")
     return float(epsilon)
 
@@ -160,9 +160,7 @@ def check_run_options(
     check_positive("checkpoint_seconds", checkpoint_seconds, allow_none=True)
     if checkpoint_iterations is not None:
         check_integer("checkpoint_iterations", checkpoint_iterations, 1, 10**9)
-    if settle is not None and (
-        not isinstance(settle, (int, float, np.floating)) or isinstance(settle, bool) or not 0 <= settle < 1
-    ):
+    if settle is not None and (not is_real(settle) or not 0 <= settle < 1):
         raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
     check_integer("iterations", iterations, 0, 10**9)
     if beta not in BETAS:

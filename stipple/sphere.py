@@ -5,6 +5,7 @@ from functools import partial
 
 import numpy as np
 
+from .checks import is_real
 from .errors import MissingInput, StippleError
 from .halftone import (
     DEFAULT_SETTLE,
@@ -159,7 +160,7 @@ def as_density(weights, lon0=0.0):
 def check_lon0(lon0):
     """``lon0`` as a float in [-360, 360] (as ``--lon0``): NaN failed in ducc0's assertion, and 360 * 2**60
     was a different map, its longitudes rounded away."""
-    if not isinstance(lon0, (int, float, np.integer, np.floating)) or isinstance(lon0, bool) or not -360 <= lon0 <= 360:
+    if not is_real(lon0) or not -360 <= lon0 <= 360:
         raise StippleError(f"lon0 must be a number of degrees in [-360, 360], not {lon0!r}")
     return float(lon0)
 

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 from PIL import Image, ImageOps, UnidentifiedImageError
 
+from ..checks import is_real
 from ..errors import StippleError
 from .sources import read_source, source_or_stdin
 
@@ -337,8 +338,7 @@ def image_density(image, *, invert=False, gamma=1.0, levels=None, name="input"):
 
 
 def _check_gamma(gamma):
-    real = isinstance(gamma, (int, float, np.integer, np.floating)) and not isinstance(gamma, bool)
-    if not real or not gamma > 0 or not np.isfinite(gamma):
+    if not is_real(gamma) or not gamma > 0 or not np.isfinite(gamma):
         raise StippleError(f"gamma must be a positive number, not {gamma}")
 
 
