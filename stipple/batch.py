@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from .errors import StippleError
 from .io.commit import commit_outputs
 from .io.safety import check_distinct
+from .io.sources import check_regular_file
 from .pipelines.image import stipple_image
 
 FORMATS = ("csv", "png", "svg")
@@ -99,9 +100,9 @@ def plan_batch(images, out_dir, formats, recipe):
             raise StippleError("batch reads image files, not stdin ('-')")
         if os.path.isdir(image):
             raise StippleError(f"{image}: is a directory; give its images (e.g. {os.path.join(image, '*.png')})")
-        if os.path.exists(image) and not os.path.isfile(image):
+        if os.path.exists(image):  # a missing one fails as its job, beside the others
             # A pipe among a shell glob's names waited for a writer, and the whole batch with it (a hostile review).
-            raise StippleError(f"{image}: not a regular file (a pipe or a device); a batch reads image files")
+            check_regular_file(image, "a pipe or a device", "; a batch reads image files")
         if _identity(image) in seen:  # the same file twice (overlapping globs): stippled once
             continue
         seen.add(_identity(image))

@@ -1,12 +1,11 @@
 """Bounded reads of ``.npz`` archives (checkpoints): each member's stored size is checked against what the reader
 expects before any of it is decompressed, and it is read as a plain array, never unpickled."""
 
-import os
-import stat
 import zipfile
 
 from ..errors import StippleError
 from .images import load_array
+from .sources import check_regular_file
 
 # Room for a member's ``.npy`` header besides its data.
 NPY_HEADER_ALLOWANCE = 1 << 12
@@ -16,8 +15,7 @@ def open_archive(path):
     """``zipfile.ZipFile(path)``, refused unless ``path`` is a regular file: a zip reader reads a device such as
     /dev/zero to its end (17.6 GB in 40 s before it was killed) and waits on a FIFO for ever. Raises
     FileNotFoundError where there is no file."""
-    if not stat.S_ISREG(os.stat(path).st_mode):
-        raise StippleError(f"{path}: not a regular file (a checkpoint is a .npz archive)")
+    check_regular_file(path, "a checkpoint is a .npz archive")
     return zipfile.ZipFile(path)
 
 

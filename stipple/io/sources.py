@@ -17,6 +17,13 @@ STDIN_NAME = "<stdin>"
 _STDIN = [None, b""]
 
 
+def check_regular_file(path, reason, advice=""):
+    """Raise unless ``path`` is a regular file (links followed; FileNotFoundError where there is none): a device is
+    read to its end, a pipe waits for a writer. The message is ``PATH: not a regular file (REASON)ADVICE``."""
+    if not stat.S_ISREG(os.stat(path).st_mode):
+        raise StippleError(f"{path}: not a regular file ({reason}){advice}")
+
+
 def stdin_stream():
     """A seekable copy of standard input named ``<stdin>``, read (bounded) once per input stream."""
     if sys.stdin is None:

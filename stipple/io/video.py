@@ -21,7 +21,7 @@ from .archive import MemberReader, open_archive
 from .commit import StagedOutputs, atomic_write, write_stdout
 from .images import auto_levels, check_grid, image_colour, image_density, load_array, load_colour, load_density
 from .mp4 import Mp4Stream, error_reason, require_av
-from .sources import PICTURE_EXTENSIONS, read_source
+from .sources import PICTURE_EXTENSIONS, check_regular_file, read_source
 
 # The still formats of a frame sequence (a GIF is read as a video), and .npy maps.
 FRAME_EXTENSIONS = tuple(extension for extension in PICTURE_EXTENSIONS if extension != ".gif") + (".npy",)
@@ -147,9 +147,8 @@ def _open_video(source, selection):
         raise StippleError(f"{source}: no such file, folder or matching frame images")
     if os.path.splitext(source)[1].lower() in FRAME_EXTENSIONS:
         raise StippleError(f"{source}: an image, not a video; use 'stipple torus', or give a folder or glob of frames")
-    if not os.path.isfile(source):
-        # A pipe waited for a writer for ever, and could not be read twice (the first frame, then the run).
-        raise StippleError(f"{source}: not a regular file (a pipe?); a video is read twice: save it to a file first")
+    # A pipe waited for a writer for ever, and could not be read twice (the first frame, then the run).
+    check_regular_file(source, "a pipe?", "; a video is read twice: save it to a file first")
     av = require_av(f"{source}: reading a video")
     try:
         with av.open(source) as container:
