@@ -85,8 +85,13 @@ def inset(centres, size, margin, least=0.0):
     page)."""
     extent = np.asarray(size, dtype=np.float64)
     check_pen_fits(least, extent, "its dots ink")
-    margin = min(float(margin), MAX_MARGIN * extent.min())
+    margin = capped_margin(margin, size)
     return margin + np.asarray(centres) * (extent - 2 * margin) / extent, margin
+
+
+def capped_margin(margin, size):
+    """``margin`` at most ``MAX_MARGIN`` of the shorter side of a ``size = (width, height)`` canvas."""
+    return min(float(margin), MAX_MARGIN * min(size))
 
 
 def check_pen_fits(reach, extent, what):

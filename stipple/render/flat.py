@@ -6,7 +6,7 @@ import numpy as np
 from ..io.png import default_png_width, render_line
 from ..io.units import BLACK, WHITE, to_user_units
 from .dots import (
-    MAX_MARGIN,
+    capped_margin,
     check_pen_fits,
     flat_dots,
     home_positions,
@@ -129,12 +129,14 @@ def line_drawing(
     if pen_width is not None:
         stroke = to_user_units(pen_width, width, columns)
         margin = stroke / 2  # a given pen too wide for the page is refused (``within``)
+    elif ink is None:
+        stroke, margin = 1.0, capped_margin(0.5, size)
     else:
         # The tone stroke of the line as drawn, kept half the stroke first found for it from the edges (at most
         # MAX_MARGIN of the shorter side: a dark strip a few pixels high asks for a stroke wider than that).
-        first = 1.0 if ink is None else tone_stroke(pixels, shape, ink)
-        stroke = first if ink is None else tone_stroke(within(pixels, size, _capped(first / 2, size)), shape, ink)
-        margin = _capped(max(first, stroke) / 2, size)
+        first = tone_stroke(pixels, shape, ink)
+        stroke = tone_stroke(within(pixels, size, capped_margin(first / 2, size)), shape, ink)
+        margin = capped_margin(max(first, stroke) / 2, size)
     return Drawing(
         size,
         width,
@@ -145,10 +147,6 @@ def line_drawing(
         stroke=stroke,
         line_colour=tuple(color),
     )
-
-
-def _capped(margin, size):
-    return min(margin, MAX_MARGIN * min(size))
 
 
 def within(pixels, size, margin):
