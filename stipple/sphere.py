@@ -40,6 +40,7 @@ from .torus import (
     DIRECT_BLUR_SIGMA,
     SOLVE_BANDWIDTH_FACTOR,
     check_bandwidth_factor,
+    check_weights,
     derivative_accuracy,
     pair_share,
     periodic_blur,
@@ -402,12 +403,8 @@ def sphere_density(source, *, uniform=False, invert=False, gamma=1.0, value_rang
             raise StippleError(f"unknown built-in density {name!r}; choose from {', '.join(BUILTINS)}")
         _refuse_transfer(source, invert, gamma, value_range)
         return BUILTINS[name]
-    values = load_input(source, invert=invert, gamma=gamma, value_range=value_range)
-    if not np.any(values > 0):  # named as the map's file, not "map" (an all-clear PNG; a hostile review)
-        raise StippleError(
-            f"{source}: the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
-        )
-    return CellMap(values, lon0)
+    # A blank one named as the map's file, not "map" (an all-clear PNG; a hostile review).
+    return CellMap(check_weights(load_input(source, invert=invert, gamma=gamma, value_range=value_range), source), lon0)
 
 
 def _refuse_transfer(what, invert, gamma, value_range):

@@ -203,9 +203,10 @@ def torus_kernel(bandwidths, scale):
     return kernel
 
 
-def check_weights(weights):
+def check_weights(weights, source=None):
     """``weights`` as a finite, non-negative, not all zero grid of float64 (complex values and masked arrays are
-    refused: numpy dropped their imaginary part or mask without a word)."""
+    refused: numpy dropped their imaginary part or mask without a word); a blank one named as ``source`` if
+    given."""
     if np.ma.isMaskedArray(weights):
         raise StippleError("weights: a masked array; fill its masked cells first (e.g. weights.filled(0))")
     values = np.asarray(weights)
@@ -215,8 +216,9 @@ def check_weights(weights):
     if np.any(weights < 0):
         raise StippleError("weights must be non-negative")
     if not np.any(weights > 0):
+        named = "" if source is None else f"{source}: "
         raise StippleError(
-            "the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
+            f"{named}the image is blank (all white) or the map zero everywhere: there is nothing to place dots on"
         )
     return weights
 
