@@ -16,6 +16,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
+from .checks import MAX_ITERATIONS
 from .errors import StippleError
 from .io.archive import MemberReader, open_archive
 from .io.commit import atomic_write
@@ -65,7 +66,6 @@ def save_checkpoint(path, state, problem):
 
 
 MAX_METADATA_BYTES = 1 << 20
-MAX_ITERATION = 10**9
 
 
 def load_checkpoint(path, problem):
@@ -101,8 +101,8 @@ def _read_checkpoint(path, archive, problem):
     metadata = _metadata(path, reader.text("metadata", MAX_METADATA_BYTES))
     _check_matches(path, metadata, problem)
     iteration = reader.scalar("iteration", "iu")
-    if not 0 <= iteration <= MAX_ITERATION:
-        raise StippleError(f"{path}: corrupt checkpoint (iteration {iteration} is outside [0, {MAX_ITERATION}])")
+    if not 0 <= iteration <= MAX_ITERATIONS:
+        raise StippleError(f"{path}: corrupt checkpoint (iteration {iteration} is outside [0, {MAX_ITERATIONS}])")
     shape = (problem.n_points, problem.manifold.dimension)
     points = reader.array("points", shape)
     _check_points(path, points, problem.domain)

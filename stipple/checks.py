@@ -6,6 +6,9 @@ import numpy as np
 
 from .errors import StippleError
 
+# The most iterations a run, a restart cycle, a checkpoint's cadence or a saved state may count.
+MAX_ITERATIONS = 10**9
+
 
 def check_integer(name, value, low, high, *, even=False):
     """``value`` as an int if it is an integer in [low, high] (and even, if asked), else a StippleError."""

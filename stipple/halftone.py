@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from . import allocator
-from .checks import check_hooks, check_integer, check_positive, is_real
+from .checks import MAX_ITERATIONS, check_hooks, check_integer, check_positive, is_real
 from .errors import StippleError
 from .multilevel import coarse_to_fine
 from .optimize import BETAS, OptimizeResult, initial_state, minimize, time_left
@@ -156,13 +156,13 @@ def check_run_options(
     check_positive("tol", tol)
     check_positive("time_limit", time_limit, allow_none=True)
     if restart_every is not None:
-        check_integer("restart_every", restart_every, 1, 10**9)
+        check_integer("restart_every", restart_every, 1, MAX_ITERATIONS)
     check_positive("checkpoint_seconds", checkpoint_seconds, allow_none=True)
     if checkpoint_iterations is not None:
-        check_integer("checkpoint_iterations", checkpoint_iterations, 1, 10**9)
+        check_integer("checkpoint_iterations", checkpoint_iterations, 1, MAX_ITERATIONS)
     if settle is not None and (not is_real(settle) or not 0 <= settle < 1):
         raise StippleError(f"settle must be a number in [0, 1), not {settle!r}")
-    check_integer("iterations", iterations, 0, 10**9)
+    check_integer("iterations", iterations, 0, MAX_ITERATIONS)
     if beta not in BETAS:
         raise StippleError(f"beta must be one of {', '.join(BETAS)}, not {beta!r}")
 

@@ -59,7 +59,7 @@ def test_the_help_defaults_are_the_librarys():
 
     assert defaults.BETAS == optimize.BETAS and defaults.SETTLE_WINDOW == optimize.SETTLE_WINDOW
     assert defaults.INITS == halftone.INITS and defaults.DEFAULT_SETTLE == halftone.DEFAULT_SETTLE
-    assert defaults.MAX_POINTS == halftone.MAX_POINTS
+    assert defaults.MAX_POINTS == halftone.MAX_POINTS and defaults.MAX_ITERATIONS == halftone.MAX_ITERATIONS
     assert defaults.BACKENDS == nufft.BACKENDS
     assert defaults.FRAME_ITERATIONS == video.FRAME_ITERATIONS
     assert defaults.LINE_ITERATIONS == LINE_ITERATIONS

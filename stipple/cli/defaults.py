@@ -9,6 +9,7 @@ SETTLE_WINDOW = 20
 INITS = ("stratified", "density", "uniform")
 DEFAULT_SETTLE = 2e-3
 MAX_POINTS = 20_000_000
+MAX_ITERATIONS = 10**9
 # stipple.nufft
 BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video

@@ -15,6 +15,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import FORMATS, check_writable, commit_outputs, output_format, taken_signals
 from ..io.safety import CheckpointLock, check_distinct
+from .defaults import MAX_ITERATIONS
 
 
 class Progress:
@@ -133,19 +134,15 @@ def parse_every(text):
         raise StippleError(f"checkpoint-every must be like 60s, 5m or 100 (iterations), not {text!r}")
     value, unit = float(match.group(1)), match.group(2) or "it"
     if unit == "it":
-        if value != int(value) or value > MAX_EVERY_ITERATIONS:
+        if value != int(value) or value > MAX_ITERATIONS:
             raise StippleError(
-                f"checkpoint-every must be a whole number of iterations up to {MAX_EVERY_ITERATIONS}, not {text!r}"
+                f"checkpoint-every must be a whole number of iterations up to {MAX_ITERATIONS}, not {text!r}"
             )
         return None, int(value)
     seconds = value * {"s": 1, "m": 60, "h": 3600}[unit]
     if not math.isfinite(seconds):
         raise StippleError(f"checkpoint-every must be a finite time, not {text!r}")
     return seconds, None
-
-
-# The library's bound on checkpoint_iterations (a larger count went through a float and was echoed changed).
-MAX_EVERY_ITERATIONS = 10**9
 
 
 @contextlib.contextmanager

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import MAX_ITERATIONS
 from ..errors import StippleError
 from ..halftone import (
     check_bandwidth,
@@ -266,7 +267,7 @@ def optimise_discs(
     weights = check_weights(weights)
     points, radii = start_discs(weights, points, radii, seed)
     count = len(points)
-    check_integer("iterations", iterations, 0, 10**9)
+    check_integer("iterations", iterations, 0, MAX_ITERATIONS)
     if not isinstance(tol, (int, float)) or not tol > 0:
         raise StippleError(f"tol must be a positive number, not {tol!r}")
     if not isinstance(settle, (int, float)) or not 0 <= settle < 1:
