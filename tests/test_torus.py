@@ -8,15 +8,19 @@ from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
 from stipple.nufft import BACKENDS
 from stipple.optimize import SETTLE_WINDOW
 from stipple.torus import (
+    CACHED_MODES,
     DEFAULT_EPSILON,
     DERIVATIVE_EPSILON,
     axis_bandwidths,
     derivative_accuracy,
     halftone_torus,
     image_coefficients,
+    radial_on_modes,
     sample_image,
     stratified_sample,
     torus_kernel,
+    torus_kernels,
+    torus_near_kernel,
     torus_problem,
     torus_scale,
 )
@@ -356,3 +360,23 @@ def test_a_start_of_the_wrong_count_names_m(init, message):
     the count nor M (a hostile review)."""
     with pytest.raises(StippleError, match=message):
         run(torus_problem(np.ones((8, 8)), 20, 8), init=init, iterations=1)
+
+
+def test_kernels_of_small_grids_are_kept_read_only_and_equal_to_fresh_ones():
+    # A video builds every frame's problem on the same grid; the kernels are computed once.
+    shape, bandwidth = (128, 208), 214
+    smooth, cross, near = torus_kernels(bandwidth, shape, True)
+    assert torus_kernels(bandwidth, shape, True)[0] is smooth
+    scale, bandwidths = torus_scale(shape), axis_bandwidths(bandwidth, shape)
+    fresh_cross = radial_on_modes(torus_near_kernel(bandwidth, scale).plane_coefficients, bandwidths, scale)
+    np.testing.assert_array_equal(cross, fresh_cross)
+    np.testing.assert_array_equal(smooth, torus_kernel(bandwidths, scale) - fresh_cross)
+    assert near.radius == torus_near_kernel(bandwidth, scale).radius
+    plain, none, no_near = torus_kernels(bandwidth, shape, False)
+    np.testing.assert_array_equal(plain, torus_kernel(bandwidths, scale))
+    assert none is None and no_near is None
+    for array in (smooth, cross, plain):
+        with pytest.raises(ValueError):
+            array[0, 0] = 1.0
+    large = 2 * int(np.sqrt(CACHED_MODES) / 2) + 2  # a grid over CACHED_MODES modes is computed afresh every time
+    assert torus_kernels(large, (64, 64), False)[0] is not torus_kernels(large, (64, 64), False)[0]
