@@ -46,7 +46,7 @@ from .video_keeper import FrameKeeper, checkpoint_settings
 # deformation iterations) leave every frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px in
 # 0.26-0.27 of a cold frame's time (20 and 10: 2.0 dB in 0.31-0.33; docs/video.md). They are split: 12 before the
 # deformation and WARM_POLISH after it.
-FRAME_ITERATIONS = 12
+FRAME_ITERATIONS = 8
 # The deformation shifts a moving object's dots as a whole, and where they meet the freed dots it leaves gaps: a
 # dark disc moving down 5 px a frame came out with white holes (its lightest pixel 0.65-0.80 for 0.05, blurred at
 # 1 px 0.16-0.21 against a cold run's 0.07). WARM_POLISH pinned iterations after the deformation, before the low
@@ -67,7 +67,7 @@ WARM_DEFORMATION = (4, 8)
 # Without the two, the ink a moving object needs came only from the freed dots around it (a light halo ahead of
 # a moving disc, E_N at N = 128 2.5 x a cold run's); the deformation without this level left the photo clips
 # 8-10 dB below a cold run at sigma 4 px; a level at N / 12 after it changed nothing.
-WARM_LEVELS = ((6, 10),)
+WARM_LEVELS = ((5, 6), (6, 10))
 # A scene cut: the darkness, blurred at one dot spacing, changed by more than CUT on average over the frame (a cut
 # between two photos: 0.15; a pan, a fade, a moving object: at most 0.012 per frame). The freed dots then make up
 # to ``iterations`` CG iterations under the cold run's stopping rule, not ``frame_iterations``.
@@ -303,8 +303,8 @@ def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=
     """Frame ``index``'s dots: a cold run without ``previous`` points, else warm-started from them (``_warm``);
     None if ``stop`` stopped it."""
     started = time.perf_counter()
-    problem = _problem(weights, bandwidth, settings, inks)
     warm = previous is not None
+    problem = _problem(weights, bandwidth, settings, inks, scaled=not warm)
     if warm:
         result = _warm(problem, previous, free, settings, stop, change)
     else:
@@ -392,8 +392,9 @@ def _correct(problem, result, settings, stop, polish=None):
     return replace(result, iterations=result.iterations + sum(level.iterations for level in result.corrections))
 
 
-def _problem(weights, bandwidth, settings, inks):
-    """A frame's problem: ``torus_problem`` of the darkness, or a colour video's ``Inks.problem``."""
+def _problem(weights, bandwidth, settings, inks, scaled=False):
+    """A frame's problem: ``torus_problem`` of the darkness (in the density-scaled metric if ``scaled``), or a
+    colour video's ``Inks.problem``."""
     if inks is not None:
         return inks.problem(weights, bandwidth)
     return torus_problem(
@@ -405,9 +406,10 @@ def _problem(weights, bandwidth, settings, inks):
         epsilon=settings.epsilon,
         hessian=settings.hessian,
         near_field=settings.near_field,
-        # The flat metric, with which the warm frames' pinned phase and correction were measured (docs/video.md);
-        # the cold first frame still starts coarse to fine.
-        precondition=False,
+        # The cold first frame as a still is solved (``stipple torus``: the density-scaled metric, the spread step);
+        # the warm frames in the flat metric, with which their pinned phase and correction were measured: at 600
+        # dots a flat frame 0 fell 2-5.5 dB below a still at sigma 4 px, and the warm frames kept that (docs/video.md).
+        precondition=scaled,
     )
 
 
