@@ -16,6 +16,7 @@ import ast
 import json
 import statistics
 import sys
+import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -61,7 +62,8 @@ def main():
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--clip", action="append", choices=sorted(CLIPS), help="default: all four")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
-    parser.add_argument("--cache", default="video_seeds_cold.json", help="the cold runs' measures, kept between runs")
+    default_cache = Path(tempfile.gettempdir()) / "stipple-video-seeds-cold.json"
+    parser.add_argument("--cache", default=default_cache, help="the cold runs' measures, kept between runs")
     args = parser.parse_args()
     for assignment in args.set:
         name, _, value = assignment.partition("=")
