@@ -103,24 +103,30 @@ class ScaledTorus(Torus):
 
 
 class PinnedTorus(Torus):
-    """The torus with some points held where they are (a video's still dots, ``stipple.video``).
+    """A torus manifold ``base`` (``Torus`` or ``ScaledTorus``) with some points held where they are (a video's
+    still dots, ``stipple.video``).
 
-    Every gradient and every transported direction is zero at the pinned points, so CG moves only the free ones.
+    The metric is ``base``'s; every gradient and every transported direction is zero at the pinned points, so CG
+    moves only the free ones.
 
     Parameters
     ----------
-    scale : array_like
-        As for ``Torus``.
+    base : Torus
+        The manifold whose metric the free points keep.
     free : array_like of bool, shape (M,)
         The points that may move.
     """
 
-    def __init__(self, scale, free):
-        super().__init__(scale)
+    def __init__(self, base, free):
+        super().__init__(base.scale)
+        self.base = base
         self.free = np.asarray(free, dtype=bool)[:, None]
 
+    def inner(self, points, u, v):
+        return self.base.inner(points, u, v)
+
     def riesz(self, points, covector):
-        return np.where(self.free, super().riesz(points, covector), 0.0)
+        return np.where(self.free, self.base.riesz(points, covector), 0.0)
 
     def transport(self, points, v, w):
         return np.where(self.free, w, 0.0)

@@ -1,7 +1,8 @@
 """Stippled video: every frame's dots warm-started from the previous frame's, so that dot i stays dot i.
 
 Frame 0 is a cold run, the same as ``stipple torus`` makes of that frame. Every later frame starts from the
-previous frame's points and makes at most ``frame_iterations`` CG iterations on its own problem moving only the
+previous frame's points and makes at most ``frame_iterations`` CG iterations on its own problem (in the same
+density-scaled metric, without the spread step) moving only the
 dots near a change: within ``free_margin`` spacings of a pixel whose darkness differs by more than ``change`` from
 what the dots there were last placed for, both as it is and blurred at one spacing (``free_dots``). The other dots
 are pinned (``PinnedTorus``): left free, one CG step spreads a local change over the whole picture (M = 20000:
@@ -42,11 +43,12 @@ from .video_inks import Inks
 from .video_keeper import FrameKeeper, checkpoint_settings
 
 # Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
-# left 4-12 % and the dots' moves in still regions were the same; with the deformation after them, 16 (and 8
-# deformation iterations) leave every frame of the bench's clips within 2.1 dB of a cold run at sigma 4 px in
-# 0.26-0.27 of a cold frame's time (20 and 10: 2.0 dB in 0.31-0.33; docs/video.md). They are split: 12 before the
-# deformation and WARM_POLISH after it.
-FRAME_ITERATIONS = 8
+# left 4-12 % and the dots' moves in still regions were the same. Since 2026-11-27 every frame is solved in the
+# density-scaled metric, and FRAME_ITERATIONS before the deformation (WARM_DEFORMATION's 4 iterations, then
+# WARM_POLISH) leave the bench's clips, and a light page with small dark blobs, within 2.2 dB of the median of
+# three stills at sigma 4 px in 0.27-0.29 of a cold frame's time; 8 before and 8 in the deformation left the light
+# page 4.6 dB below (docs/video.md).
+FRAME_ITERATIONS = 12
 # The deformation shifts a moving object's dots as a whole, and where they meet the freed dots it leaves gaps: a
 # dark disc moving down 5 px a frame came out with white holes (its lightest pixel 0.65-0.80 for 0.05, blurred at
 # 1 px 0.16-0.21 against a cold run's 0.07). WARM_POLISH pinned iterations after the deformation, before the low
@@ -61,8 +63,9 @@ FREE_MARGIN = 3.0
 # to lower the frame's whole objective (``stipple.deformation``). It fixes the middle frequencies that the pinned
 # iterations leave (on a fade, 3-5 times a cold run's error at 12-24 cycles per image, where a blur of 4 px still
 # sees them) without stirring the high ones: the plain E_N at N / 3 of the previous correction could not, and at
-# N / 4 it stirred the light parts of a gradient, where the dots are sparser than its modes (docs/video.md).
-WARM_DEFORMATION = (4, 8)
+# N / 4 it stirred the light parts of a gradient, where the dots are sparser than its modes (docs/video.md). In the
+# density-scaled metric the pinned iterations do more of its work: 4 of its iterations instead of 8.
+WARM_DEFORMATION = (4, 4)
 # Then, for each (factor, iterations), CG on the plain E_N at N / factor over all dots: the lowest frequencies.
 # Without the two, the ink a moving object needs came only from the freed dots around it (a light halo ahead of
 # a moving disc, E_N at N = 128 2.5 x a cold run's); the deformation without this level left the photo clips
@@ -303,8 +306,8 @@ def _optimise(weights, index, previous, free, bandwidth, settings, stop, change=
     """Frame ``index``'s dots: a cold run without ``previous`` points, else warm-started from them (``_warm``);
     None if ``stop`` stopped it."""
     started = time.perf_counter()
+    problem = _problem(weights, bandwidth, settings, inks)
     warm = previous is not None
-    problem = _problem(weights, bandwidth, settings, inks, scaled=not warm)
     if warm:
         result = _warm(problem, previous, free, settings, stop, change)
     else:
@@ -326,11 +329,13 @@ def _warm(problem, previous, free, settings, stop, change):
     """A warm frame: at most ``frame_iterations`` CG iterations moving the ``free`` dots only (the others pinned;
     after a scene cut, ``change`` above ``CUT``, up to ``iterations``), then, where the darkness changed at all,
     the correction over all dots (``_correct``)."""
-    options = _run_options(settings, stop)
+    # Without the spread step, which a warm frame cannot pay for: it needs CG iterations over all dots and the
+    # correction after it (docs/video.md).
+    options = {**_run_options(settings, stop), "spread": False}
     changed = change > 0
     if not free.any() and not (changed and settings.correct):
         return run(problem, init=previous, iterations=0, correct=False, **options)
-    pinned = replace(problem, manifold=PinnedTorus(problem.manifold.scale, free))
+    pinned = replace(problem, manifold=PinnedTorus(problem.manifold, free))
     if change > CUT and free.any():
         options["tol"] = _cut_tol(problem, pinned, previous, settings)
     result = run(
@@ -392,9 +397,8 @@ def _correct(problem, result, settings, stop, polish=None):
     return replace(result, iterations=result.iterations + sum(level.iterations for level in result.corrections))
 
 
-def _problem(weights, bandwidth, settings, inks, scaled=False):
-    """A frame's problem: ``torus_problem`` of the darkness (in the density-scaled metric if ``scaled``), or a
-    colour video's ``Inks.problem``."""
+def _problem(weights, bandwidth, settings, inks):
+    """A frame's problem: ``torus_problem`` of the darkness, or a colour video's ``Inks.problem``."""
     if inks is not None:
         return inks.problem(weights, bandwidth)
     return torus_problem(
@@ -406,10 +410,10 @@ def _problem(weights, bandwidth, settings, inks, scaled=False):
         epsilon=settings.epsilon,
         hessian=settings.hessian,
         near_field=settings.near_field,
-        # The cold first frame as a still is solved (``stipple torus``: the density-scaled metric, the spread step);
-        # the warm frames in the flat metric, with which their pinned phase and correction were measured: at 600
-        # dots a flat frame 0 fell 2-5.5 dB below a still at sigma 4 px, and the warm frames kept that (docs/video.md).
-        precondition=scaled,
+        # Every frame in the density-scaled metric, as a still is solved: in the flat metric, 600 dots on a photo
+        # fell 2-5.5 dB below a still at sigma 4 px in frame 0, and on held-out clips the warm frames stayed 2-13 dB
+        # below (a dark pan, a wide clip, light backgrounds with small dark blobs; docs/video.md).
+        precondition=True,
     )
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from stipple.manifolds import Sphere, Torus
+from stipple.manifolds import PinnedTorus, ScaledTorus, Sphere, Torus
 from stipple.optimize import BETAS, minimize
 
 
@@ -147,3 +147,17 @@ def test_both_beta_rules_descend_on_a_bowl(beta):
     result = minimize(Bowl(centre), Torus(), start, tol=1e-6, max_iterations=500, beta=beta)
     assert result.status == "converged"
     assert np.all(np.diff(result.energies) <= 0)
+
+
+def test_a_pinned_torus_keeps_its_base_metric_and_moves_only_the_free_points():
+    rng = np.random.default_rng(3)
+    points, covector, direction = rng.random((3, 50, 2))
+    field = 0.5 + rng.random((12, 16))
+    base = ScaledTorus((1.0, 0.75), field)
+    free = rng.random(50) < 0.4
+    pinned = PinnedTorus(base, free)
+    assert pinned.inner(points, covector, direction) == base.inner(points, covector, direction)
+    moved = pinned.riesz(points, covector)
+    np.testing.assert_array_equal(moved[free], base.riesz(points, covector)[free])
+    assert not moved[~free].any() and not pinned.transport(points, moved, direction)[~free].any()
+    np.testing.assert_array_equal(pinned.retract(points, moved)[~free], points[~free])

@@ -142,15 +142,49 @@ def test_the_first_warm_frame_of_a_fade_is_corrected_up_to_the_blurs_reach():
     assert max(below) < 3
 
 
+def light_with_blobs(frames, width=200, height=120):
+    """Darkness of a light page (0.06) with a still dark ring and three small dark blobs that move, grow and shrink,
+    their ink scaled so that every frame holds frame 0's (a held-out review's clip)."""
+    y, x = np.mgrid[0:height, 0:width] + 0.5
+    page = 0.06 + 0.85 * np.exp(-(((np.hypot(x - 165, y - 60) - 18) / 2.5) ** 2))
+    blobs = ((30, 30, 1.5, 0.5, 3.0, 0.35), (60, 85, 1.0, -1.0, 7.0, -0.3), (95, 40, -1.2, 1.2, 4.0, 0.15))
+    inks = [
+        sum(
+            np.exp(-((x - x0 - vx * k) ** 2 + (y - y0 - vy * k) ** 2) / (2 * (s0 + ds * k) ** 2))
+            for x0, y0, vx, vy, s0, ds in blobs
+        )
+        for k in range(frames)
+    ]
+    return [np.clip(page + 0.9 * ink * inks[0].sum() / ink.sum(), 0, 0.97) for ink in inks]
+
+
+def test_a_warm_frame_on_a_light_page_is_as_good_as_a_still_where_a_viewer_looks():
+    # In the flat metric the first warm frame lay 5.3-5.9 dB below the median of three stills at sigma 4 px
+    # (seeds 0-2): a still solves in the density-scaled metric, where the sparse dots of a light page take steps
+    # as long as their spacing; now every frame does.
+    count, clip = 2000, light_with_blobs(2)
+    below = []
+    for seed in range(3):
+        done = []
+        stipple_video(enumerate(clip), VideoSettings(n_points=count, threads=1, seed=seed), on_frame=done.append)
+        below.append(psnr_below_stills(clip[1], done[1].points, count))
+    assert max(below) < 3
+
+
 def test_moving_dots_follow_the_disc():
     clip = moving_disc()
     _, frames = stippled(clip)
     rows, columns = clip[0].shape
+    y, x = np.mgrid[0:rows, 0:columns] + 0.5
     for k in (0, len(clip) - 1):
-        pixels = frames[k].points * [columns, rows]
         centre = np.array([columns * (0.2 + 0.1 * k), 0.75 * rows])
-        inside = np.hypot(*(pixels - centre).T) < 0.1 * rows
-        assert inside.sum() > 2 * COUNT * np.pi * (0.1 * rows) ** 2 / (rows * columns)  # denser than average
+        inside = np.hypot(*(frames[k].points * [columns, rows] - centre).T) < 0.1 * rows
+        # The disc's share of the frame's ink: 18.5 dots, 1.96 x the average over its area. (The test asked for
+        # 2 x the average, 18.8, more than the share itself: 18-21 dots passed or failed by chance.)
+        darkness = 1 - clip[k]
+        share = COUNT * darkness[np.hypot(x - centre[0], y - centre[1]) < 0.1 * rows].sum() / darkness.sum()
+        assert share > 1.5 * COUNT * np.pi * (0.1 * rows) ** 2 / (rows * columns)  # a disc denser than average
+        assert inside.sum() > 0.8 * share
 
 
 def test_a_stop_during_the_correction_drops_the_frame():

@@ -13,7 +13,7 @@ MAX_ITERATIONS = 10**9
 # stipple.nufft
 BACKENDS = ("ducc0", "finufft", "cufinufft")
 # stipple.video
-FRAME_ITERATIONS = 8
+FRAME_ITERATIONS = 12
 # stipple.line
 LINE_ITERATIONS = 400
 # stipple.measures.plot_estimate (a common desktop plotter: mm/s pen down, mm/s pen up, seconds per lift)
