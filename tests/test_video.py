@@ -109,37 +109,32 @@ def test_a_cross_fade_is_as_good_as_cold_runs_where_a_viewer_looks():
     assert np.mean(below) < 3 and max(below) < 5
 
 
-def psnr_below_stills(weights, points, count, seeds=3):
-    """How far the dots' PSNR at sigma 4 px lies below the median of ``seeds`` stills' (``halftone_torus``)."""
-    stills = [halftone_torus(weights, count, threads=1, seed=seed).points for seed in range(seeds)]
-    return np.median([psnr(*exact_blurs(weights, still, 4.0)) for still in stills]) - psnr(
-        *exact_blurs(weights, points, 4.0)
-    )
+def last_frames_below_stills(clip, count, seeds=3):
+    """For warm runs of ``clip`` from each of ``seeds`` seeds, how far the last frame's PSNR at sigma 4 px lies below
+    the median of ``seeds`` stills of it (``halftone_torus``)."""
+    last = clip[-1]
+    stills = [halftone_torus(last, count, threads=1, seed=seed).points for seed in range(seeds)]
+    reference = np.median([psnr(*exact_blurs(last, still, 4.0)) for still in stills])
+    below = []
+    for seed in range(seeds):
+        done = []
+        stipple_video(enumerate(clip), VideoSettings(n_points=count, threads=1, seed=seed), on_frame=done.append)
+        below.append(reference - psnr(*exact_blurs(last, done[-1].points, 4.0)))
+    return below
 
 
 def test_the_cold_first_frame_is_as_good_as_a_still_where_a_viewer_looks():
     # Frame 0 is solved as a still is. In the flat metric of the warm frames, 600 dots on this photo fell 2.0 / 3.2
     # / 5.5 dB below the median of three stills at sigma 4 px (seeds 0, 1, 2), and the warm frames kept that.
-    count, (weights,) = 600, camera_to_coins((64, 96), [0.0])
-    below = []
-    for seed in range(3):
-        done = []
-        stipple_video(enumerate([weights]), VideoSettings(n_points=count, threads=1, seed=seed), on_frame=done.append)
-        below.append(psnr_below_stills(weights, done[0].points, count))
-    assert max(below) < 3
+    assert max(last_frames_below_stills(camera_to_coins((64, 96), [0.0]), 600)) < 3
 
 
 def test_the_first_warm_frame_of_a_fade_is_corrected_up_to_the_blurs_reach():
     # The plain E_N level at N / 6 reaches 11 cycles along the short side of 208 x 128 px, where a blur of 4 px
     # still sees 18; with it alone the first warm frame of this fade lay 2.8 / 4.3 / 2.4 dB below the stills
-    # (seeds 0, 1, 2). A level at N / 5 before it: 1.9 / 1.0 / 0.6.
-    count, clip = 2000, camera_to_coins((128, 208), [0.0, 1 / 15])
-    below = []
-    for seed in range(3):
-        done = []
-        stipple_video(enumerate(clip), VideoSettings(n_points=count, threads=1, seed=seed), on_frame=done.append)
-        below.append(psnr_below_stills(clip[1], done[1].points, count))
-    assert max(below) < 3
+    # (seeds 0, 1, 2; 3.7 / 4.2 / 4.2 with every frame in the density-scaled metric). A level at N / 5 before it:
+    # 1.4 / 1.5 / 2.0.
+    assert max(last_frames_below_stills(camera_to_coins((128, 208), [0.0, 1 / 15]), 2000)) < 3
 
 
 def light_with_blobs(frames, width=200, height=120):
@@ -159,16 +154,10 @@ def light_with_blobs(frames, width=200, height=120):
 
 
 def test_a_warm_frame_on_a_light_page_is_as_good_as_a_still_where_a_viewer_looks():
-    # In the flat metric the first warm frame lay 5.3-5.9 dB below the median of three stills at sigma 4 px
-    # (seeds 0-2): a still solves in the density-scaled metric, where the sparse dots of a light page take steps
-    # as long as their spacing; now every frame does.
-    count, clip = 2000, light_with_blobs(2)
-    below = []
-    for seed in range(3):
-        done = []
-        stipple_video(enumerate(clip), VideoSettings(n_points=count, threads=1, seed=seed), on_frame=done.append)
-        below.append(psnr_below_stills(clip[1], done[1].points, count))
-    assert max(below) < 3
+    # In the flat metric the first warm frame lay up to 11.6 dB below the median of three stills at sigma 4 px
+    # (seeds 0-2; 4.6 in the scaled metric with 8 pinned iterations): a still solves in the density-scaled metric,
+    # where the sparse dots of a light page take steps as long as their spacing; now every frame does.
+    assert max(last_frames_below_stills(light_with_blobs(2), 2000)) < 3
 
 
 def test_moving_dots_follow_the_disc():
