@@ -63,9 +63,14 @@ class FrameKeeper:
         self.saved = (time.monotonic(), len(self.points))
 
 
+# The warm frames' method, in every checkpoint: a checkpoint of another method's frames is refused, not continued
+# with frames of another quality (2: every frame in the density-scaled metric, 2026-11-27; older files have none).
+WARM_METHOD = 2
+
+
 def checkpoint_settings(settings, identity):
     """The settings a video's checkpoint must match (``stipple.video.VideoSettings``): the problem's, the warm
-    frames' cap, the start and ``identity`` (the density's transfer, the frame selection)."""
+    frames' cap and method, the start and ``identity`` (the density's transfer, the frame selection)."""
     init = settings.init if isinstance(settings.init, str) else "points"
     defining = {
         "points": settings.n_points,
@@ -77,6 +82,7 @@ def checkpoint_settings(settings, identity):
         "frame_iterations": settings.frame_iterations,
         "change": settings.change,
         "free_margin": settings.free_margin,
+        "warm_method": WARM_METHOD,
     }
     if settings.palette is not None:
         defining.update(

@@ -219,6 +219,20 @@ def test_a_resumed_run_gives_the_uninterrupted_runs_dots(tmp_path):
         stipple_video(enumerate([1 - g[::-1] for g in clip]), settings, checkpoint=checkpoint, resume=True)
 
 
+def test_a_checkpoint_of_another_warm_method_is_refused(tmp_path, monkeypatch):
+    # A checkpoint written before the warm frames' metric changed resumed without a word, and its replayed frames
+    # were of the other method's quality (a code review).
+    from stipple import video_keeper
+
+    clip, checkpoint = [1 - g for g in moving_disc(3)], tmp_path / "run.ckpt"
+    settings = VideoSettings(n_points=COUNT, bandwidth=BANDWIDTH, threads=1)
+    monkeypatch.setattr(video_keeper, "WARM_METHOD", 1)
+    stipple_video(enumerate(clip[:2]), settings, checkpoint=checkpoint)
+    monkeypatch.undo()
+    with pytest.raises(StippleError, match="warm_method was 1, now 2"):
+        stipple_video(enumerate(clip), settings, checkpoint=checkpoint, resume=True)
+
+
 def frames_folder(folder, clip):
     folder.mkdir()
     for k, gray in enumerate(clip):
