@@ -203,9 +203,9 @@ def torus_kernel(bandwidths, scale):
     return kernel
 
 
-# A video builds every frame's problems, and a run its coarse ones, on the same mode grids: kernels on grids of up
-# to CACHED_MODES modes are kept (their quadrature took 4.5 ms of a 2000-dot warm frame's 90).
-CACHED_MODES = 2**20
+# A video's frames (and a run's coarse problems) build the same kernels: up to 16 on grids of CACHED_MODES modes or
+# fewer are kept, 128 MiB at most (a colour frame builds 10-13; their quadrature took 4.5 ms of a 90 ms warm frame).
+CACHED_MODES = 2**19
 
 
 def torus_kernels(bandwidth, shape, near_field):
@@ -226,7 +226,7 @@ def _kernels(bandwidth, shape, near_field):
     return kernel, (cross if near_field else None), near
 
 
-_cached_kernels = lru_cache(maxsize=8)(_kernels)
+_cached_kernels = lru_cache(maxsize=16)(_kernels)
 
 
 def check_weights(weights, source=None):

@@ -2,18 +2,15 @@
 
 Frame 0 is a cold run, the same as ``stipple torus`` makes of that frame. Every later frame starts from the
 previous frame's points and makes at most ``frame_iterations`` CG iterations on its own problem (in the same
-density-scaled metric, without the spread step) moving only the
-dots near a change: within ``free_margin`` spacings of a pixel whose darkness differs by more than ``change`` from
-what the dots there were last placed for, both as it is and blurred at one spacing (``free_dots``). The other dots
+density-scaled metric, without the spread step) moving only the dots near a change (``free_dots``). The other dots
 are pinned (``PinnedTorus``): left free, one CG step spreads a local change over the whole picture (M = 20000:
 still dots moved 0.25 of their spacing per frame), and the still parts of the video would boil. Then, where the
-darkness changed at all, a correction moves all dots by smooth deformations: first one field chosen by CG on the
-frame's whole objective (``WARM_DEFORMATION``, ``stipple.deformation``), then CG on the plain ``E_N`` of a low
-bandwidth (``WARM_LEVELS``). They bring the ink a moving object needs from wherever it is and fix the low and
-middle frequencies a viewer sees, and leave the still dots' local arrangement as it is (they move a median
-0.01-0.02 spacings). After a scene cut (``frame_change`` above ``CUT``) the dots of the
-changed parts make as many iterations as a cold run. The measurements that chose these settings are in
-docs/video.md.
+darkness changed at all, a correction moves all dots by smooth deformations: one field chosen by CG on the
+frame's whole objective (``WARM_DEFORMATION``, ``stipple.deformation``), then CG on the plain ``E_N`` of low
+bandwidths (``WARM_LEVELS``). They bring the ink a moving object needs from wherever it is and fix the low and
+middle frequencies a viewer sees, and leave the still dots' local arrangement as it is. After a scene cut
+(``frame_change`` above ``CUT``) the dots of the changed parts make as many iterations as a cold run. The
+measurements that chose these settings are in docs/video.md.
 """
 
 import time
@@ -66,6 +63,8 @@ FREE_MARGIN = 3.0
 # N / 4 it stirred the light parts of a gradient, where the dots are sparser than its modes (docs/video.md). In the
 # density-scaled metric the pinned iterations do more of its work: 4 of its iterations instead of 8.
 WARM_DEFORMATION = (4, 4)
+# A colour video's joint problem stays in the flat metric (``Inks.problem``), where 8 were measured.
+COLOUR_DEFORMATION = (4, 8)
 # Then, for each (factor, iterations), CG on the plain E_N at N / factor over all dots: the lowest frequencies.
 # Without the two, the ink a moving object needs came only from the freed dots around it (a light halo ahead of
 # a moving disc, E_N at N = 128 2.5 x a cold run's); the deformation without this level left the photo clips
@@ -372,7 +371,7 @@ def _correct(problem, result, settings, stop, polish=None):
     """A warm frame's correction over all dots: the smooth deformation (``WARM_DEFORMATION``), then ``polish``
     (the freed dots' ``WARM_POLISH`` iterations, if given), then the plain ``E_N`` levels (``WARM_LEVELS``); the
     result counts their iterations."""
-    factor, iterations = WARM_DEFORMATION
+    factor, iterations = WARM_DEFORMATION if settings.palette is None else COLOUR_DEFORMATION
     shown = None if stop is None else (lambda _: stop(result.state))
     points, deformed = deform(
         problem.objective,
