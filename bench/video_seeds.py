@@ -67,6 +67,8 @@ def main():
     args = parser.parse_args()
     for assignment in args.set:
         name, _, value = assignment.partition("=")
+        if not hasattr(video_module, name):
+            parser.error(f"--set: stipple.video has no {name}")
         setattr(video_module, name, ast.literal_eval(value))
     cache = Path(args.cache)
     references = json.loads(cache.read_text()) if cache.exists() else {}
