@@ -17,7 +17,8 @@ dots (``warm``) against a cold run of the frame on its own (``halftone_torus``, 
   phase leaves pairs closer than a cold run's: chains ahead of a moving object);
 * the moves of the still dots (in pixels farther than two spacings from every pixel that changes in the clip)
   from the frame before, over the local hexagonal spacing: median and 95th percentile;
-* seconds per frame;
+* seconds per frame, and the warm over cold ratio again from a second warm run with each frame's cold run (seed 0)
+  made right after it (``alternated``: the two share the machine's drift, which moved the first ratio by 0.02);
 * the same ratios for a second cold run of every frame (seed 1) against the first: the cold runs' own scatter;
 * with ``--cold-seeds K`` (K >= 3), the same ratios against the median of K cold runs of every frame (seeds 0 to
   K - 1), and each cold run's own against that median: one cold run is a noisy reference for a maximum over the
@@ -95,12 +96,33 @@ def cold_runs(weights, count, bandwidth, threads, seed=0):
     return runs
 
 
-def warm_run(weights, count, bandwidth, threads, **options):
-    """``(points, seconds)`` of every frame of ``stipple_video``."""
+def warm_run(weights, count, bandwidth, threads, alongside=None, **options):
+    """``(points, seconds)`` of every frame of ``stipple_video``; ``alongside(k)``, if given, runs after frame k
+    (between frames, outside their timing)."""
     frames = []
+
+    def keep(frame):
+        frames.append((frame.points, frame.seconds))
+        if alongside is not None:
+            alongside(len(frames) - 1)
+
     settings = VideoSettings(n_points=count, bandwidth=bandwidth, threads=threads, **options)
-    stipple_video(enumerate(weights), settings, on_frame=lambda f: frames.append((f.points, f.seconds)))
+    stipple_video(enumerate(weights), settings, on_frame=keep)
     return frames
+
+
+def alternated_seconds(weights, count, bandwidth, threads):
+    """``(warm, cold)``: the warm frames' seconds and those of a cold run (seed 0) of each frame made right after
+    it, so that the two alternate and share the machine's drift."""
+    cold = []
+    warm = warm_run(
+        weights,
+        count,
+        bandwidth,
+        threads,
+        alongside=lambda k: cold.append(cold_runs([weights[k]], count, bandwidth, threads)[0][1]),
+    )
+    return [seconds for _, seconds in warm], cold
 
 
 def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
@@ -113,6 +135,7 @@ def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
     cold = cold or cold_runs(weights, count, bandwidth, threads)
     warm = warm_run(weights, count, bandwidth, threads, **options)
     others = [cold_runs(weights, count, bandwidth, threads, seed=seed) for seed in range(1, max(cold_seeds, 2))]
+    alternated = alternated_seconds(weights, count, bandwidth, threads)
     margin = 2 * float(np.median(spacing(weights[0], cold[0][0] * scale, count)))
     mask = still_mask([np.round(255 * w) for w in weights], margin)
     rows_out = []
@@ -149,6 +172,7 @@ def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
         "still_move_median": max((m[0] for m in moved), default=None),
         "still_move_p95": max((m[1] for m in moved), default=None),
         "warm_over_cold_seconds": statistics.median(s for _, s in warm[1:]) / statistics.median(s for _, s in cold),
+        "warm_over_cold_seconds_alternated": statistics.median(alternated[0][1:]) / statistics.median(alternated[1]),
     }
     # The same criteria for a second cold run (seed 1) against the first: how far the cold runs scatter.
     worst["seed_1"] = {key: max(r["seed_1"][key] for r in rows_out) for key in rows_out[0]["seed_1"]}
