@@ -17,8 +17,8 @@ dots (``warm``) against a cold run of the frame on its own (``halftone_torus``, 
   phase leaves pairs closer than a cold run's: chains ahead of a moving object);
 * the moves of the still dots (in pixels farther than two spacings from every pixel that changes in the clip)
   from the frame before, over the local hexagonal spacing: median and 95th percentile;
-* seconds per frame, and the warm over cold ratio again from a second warm run with each frame's cold run (seed 0)
-  made right after it (``alternated``: the two share the machine's drift, which moved the first ratio by 0.02);
+* seconds per frame, and the warm over cold ratio again with each frame's cold run (seed 0) timed right after
+  its warm frame (``alternated``: the two share the machine's drift, which moved the first ratio by up to 0.04);
 * the same ratios for a second cold run of every frame (seed 1) against the first: the cold runs' own scatter;
 * with ``--cold-seeds K`` (K >= 3), the same ratios against the median of K cold runs of every frame (seeds 0 to
   K - 1), and each cold run's own against that median: one cold run is a noisy reference for a maximum over the
@@ -111,20 +111,6 @@ def warm_run(weights, count, bandwidth, threads, alongside=None, **options):
     return frames
 
 
-def alternated_seconds(weights, count, bandwidth, threads):
-    """``(warm, cold)``: the warm frames' seconds and those of a cold run (seed 0) of each frame made right after
-    it, so that the two alternate and share the machine's drift."""
-    cold = []
-    warm = warm_run(
-        weights,
-        count,
-        bandwidth,
-        threads,
-        alongside=lambda k: cold.append(cold_runs([weights[k]], count, bandwidth, threads)[0][1]),
-    )
-    return [seconds for _, seconds in warm], cold
-
-
 def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
     """Per-frame measures of the warm run against the cold runs, and the worst frame's ratios (with ``cold_seeds``
     of 3 or more, also against the median of that many cold runs: ``against_median``)."""
@@ -133,9 +119,17 @@ def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
     scale = np.array([columns, rows])
     bandwidth = default_bandwidth(count, weights[0])
     cold = cold or cold_runs(weights, count, bandwidth, threads)
-    warm = warm_run(weights, count, bandwidth, threads, **options)
+    # Each frame's cold run (seed 0) timed again right after its warm frame: the two share the machine's drift.
+    alternated = []
+    warm = warm_run(
+        weights,
+        count,
+        bandwidth,
+        threads,
+        alongside=lambda k: alternated.append(cold_runs([weights[k]], count, bandwidth, threads)[0][1]),
+        **options,
+    )
     others = [cold_runs(weights, count, bandwidth, threads, seed=seed) for seed in range(1, max(cold_seeds, 2))]
-    alternated = alternated_seconds(weights, count, bandwidth, threads)
     margin = 2 * float(np.median(spacing(weights[0], cold[0][0] * scale, count)))
     mask = still_mask([np.round(255 * w) for w in weights], margin)
     rows_out = []
@@ -172,7 +166,7 @@ def clip_case(name, clip, count, threads, cold=None, cold_seeds=2, **options):
         "still_move_median": max((m[0] for m in moved), default=None),
         "still_move_p95": max((m[1] for m in moved), default=None),
         "warm_over_cold_seconds": statistics.median(s for _, s in warm[1:]) / statistics.median(s for _, s in cold),
-        "warm_over_cold_seconds_alternated": statistics.median(alternated[0][1:]) / statistics.median(alternated[1]),
+        "warm_over_cold_seconds_alternated": statistics.median(s for _, s in warm[1:]) / statistics.median(alternated),
     }
     # The same criteria for a second cold run (seed 1) against the first: how far the cold runs scatter.
     worst["seed_1"] = {key: max(r["seed_1"][key] for r in rows_out) for key in rows_out[0]["seed_1"]}
