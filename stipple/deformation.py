@@ -14,7 +14,7 @@ import numpy as np
 
 from .nufft import make_nufft
 from .optimize import minimize
-from .torus import scaled_bandwidths
+from .torus_spectrum import scaled_bandwidths
 from .transforms import torus_modes
 
 # The displacement field's transforms are small: ducc0 on one thread, whatever the objective's backend (the pool's

@@ -10,7 +10,7 @@ from .errors import StippleError
 from .io.images import check_grid
 from .manifolds import Sphere
 from .sampling import stratified_cells
-from .torus import cell_factor
+from .torus_spectrum import cell_factor
 
 
 class CellMap:

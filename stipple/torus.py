@@ -1,7 +1,7 @@
 """Halftoning on the torus: an image's exact Fourier coefficients, the ball-discrepancy kernel, sampling."""
 
 import os
-from functools import lru_cache, partial
+from functools import partial
 
 import numpy as np
 
@@ -23,7 +23,6 @@ from .halftone import (
     run,
 )
 from .io.images import check_grid, load_density
-from .kernels import NearKernel, ball_kernel, ball_profile
 from .manifolds import ScaledTorus, Torus
 from .multilevel import split_points
 from .nearfield import NearField, TorusPairs
@@ -31,7 +30,8 @@ from .nufft import BACKENDS, make_nufft
 from .objective import Discrepancy, SumObjective
 from .sampling import sample_image, stratified_sample
 from .spread import spread_close
-from .transforms import TorusFourier, centred_modes
+from .torus_spectrum import NEAR_FIELD_REACH, axis_bandwidths, image_coefficients, torus_kernels, torus_scale
+from .transforms import TorusFourier
 
 # Transform accuracy: at M = 10^6 the energy after 8 CG iterations moved by 4e-9 of itself against 1e-9, at
 # 10 % less time per iteration (README, Defaults).
@@ -53,9 +53,6 @@ def derivative_accuracy(epsilon, derivative_epsilon=None):
 
 # The paper's Fig. 5.1 (M = 30150, N = 650 on a square): N = 4.02 / (hexagonal spacing of M dots).
 MODES_PER_SPACING = 4.02
-# Near-field radius times the bandwidth: eps = 3 / N (the smooth part's force error is ~0.7 % of the kernel's
-# contact force; 0.3 % at 4 / N for 1.8 times the pairs).
-NEAR_FIELD_REACH = 3.0
 # The default bandwidth keeps the near field at most this many local spacings wide where the density peaks
 # (about 90 pairs per dot there): fewer modes, more pairs; the transforms cost more than the pairs.
 NEAR_FIELD_SPACINGS = 5.0
@@ -138,95 +135,6 @@ def stiffness(blurred, mean):
     """The metric's factor from the density blurred at one dot spacing: ``max(blurred / mean, STIFFNESS_FLOOR) **
     STIFFNESS_POWER``."""
     return np.maximum(blurred / mean, STIFFNESS_FLOOR) ** STIFFNESS_POWER
-
-
-def torus_near_kernel(bandwidth, scale):
-    """The ball kernel's short range for ``bandwidth``: radius ``3/N``, at most a quarter of the shorter side."""
-    return NearKernel(ball_profile, min(NEAR_FIELD_REACH / bandwidth, 0.25 * min(scale)))
-
-
-def torus_scale(shape):
-    """Physical side lengths ``(W/L, H/L)``, ``L = max(W, H)``, of the torus for a ``(H, W)`` grid."""
-    rows, columns = shape
-    longest = max(rows, columns)
-    return np.array([columns / longest, rows / longest])
-
-
-def axis_bandwidths(bandwidth, shape):
-    """Per-axis bandwidths ``(N1, N2)`` (x, y) of a ``(H, W)`` grid, even, giving the same resolution in both
-    directions."""
-    return scaled_bandwidths(bandwidth, torus_scale(shape))
-
-
-def scaled_bandwidths(bandwidth, scale):
-    """Per-axis bandwidths ``(N1, N2)`` for a torus of side lengths ``scale``: ``bandwidth`` along the longer side,
-    in proportion along the other, each even."""
-    return tuple(even_at_least_2(bandwidth * side) for side in scale)
-
-
-def cell_factor(k, cells):
-    """``(1 - e^{-2 pi i k / n}) / (2 pi i k / n)``: the Fourier integral of one cell of ``n``, ``1`` at ``k = 0``."""
-    z = 2j * np.pi * np.asarray(k, dtype=float) / cells
-    safe = np.where(z == 0, 1.0, z)
-    return np.where(z == 0, 1.0, (1 - np.exp(-safe)) / safe)
-
-
-def image_coefficients(weights, bandwidths):
-    """Exact ``w_n = int_{[0,1)^2} w(u) e^{-2 pi i n.u} du`` of the pixel-constant image, ``|n_j| <= N_j/2``.
-
-    Returns an array of shape ``(N1+1, N2+1)``, first axis ``n1`` (x, columns), second ``n2`` (y, rows). The
-    cell factors are separable: computed per axis (at M = 10^6 the 2-D grid has 14 million modes).
-    """
-    rows, columns = weights.shape
-    spectrum = np.fft.fft2(weights)
-    n1, n2 = (centred_modes(bandwidth) for bandwidth in bandwidths)
-    dft = spectrum[np.ix_(n2 % rows, n1 % columns)].T
-    factors = np.outer(cell_factor(n1, columns), cell_factor(n2, rows)) / (rows * columns)
-    return np.ascontiguousarray(dft * factors)
-
-
-def radial_on_modes(radial, bandwidths, scale):
-    """``radial(|xi|)``, ``xi = (n1 / scale_x, n2 / scale_y)``, on the mode grid: the physical frequencies.
-
-    Evaluated on the quadrant ``n1, n2 >= 0`` only (a quarter of the modes) and mirrored: ``|xi|`` is even in both.
-    """
-    n1, n2 = (np.arange(bandwidth // 2 + 1) for bandwidth in bandwidths)
-    quadrant = radial(np.hypot.outer(n1 / scale[0], n2 / scale[1]))
-    mirror = [np.abs(centred_modes(bandwidth)) for bandwidth in bandwidths]
-    return quadrant[np.ix_(*mirror)]
-
-
-def torus_kernel(bandwidths, scale):
-    """``kB(|xi|)`` on the mode grid; ``k_0 = 0``."""
-    kernel = radial_on_modes(ball_kernel, bandwidths, scale)
-    kernel[bandwidths[0] // 2, bandwidths[1] // 2] = 0.0
-    return kernel
-
-
-# A video's frames (and a run's coarse problems) build the same kernels: up to 16 on grids of CACHED_MODES modes or
-# fewer are kept, 128 MiB at most (a colour frame builds 10-13; their quadrature took 4.5 ms of a 90 ms warm frame).
-CACHED_MODES = 2**19
-
-
-def torus_kernels(bandwidth, shape, near_field):
-    """``(smooth, cross, near)``: ``torus_kernel`` at ``bandwidth`` for a ``shape`` image less the near field's share
-    ``cross`` (``near``'s plane coefficients), or ``(kernel, None, None)``; read-only, cached on small grids."""
-    modes = np.prod(np.add(axis_bandwidths(bandwidth, shape), 1))
-    return (_cached_kernels if modes <= CACHED_MODES else _kernels)(bandwidth, tuple(shape), bool(near_field))
-
-
-def _kernels(bandwidth, shape, near_field):
-    scale, bandwidths = torus_scale(shape), axis_bandwidths(bandwidth, shape)
-    kernel, cross, near = torus_kernel(bandwidths, scale), np.zeros(0), None
-    if near_field:
-        near = torus_near_kernel(bandwidth, scale)
-        cross = radial_on_modes(near.plane_coefficients, bandwidths, scale)
-        kernel = kernel - cross
-    kernel.flags.writeable = cross.flags.writeable = False
-    return kernel, (cross if near_field else None), near
-
-
-_cached_kernels = lru_cache(maxsize=16)(_kernels)
 
 
 def check_weights(weights, source=None):

@@ -8,20 +8,22 @@ from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
 from stipple.nufft import BACKENDS
 from stipple.optimize import SETTLE_WINDOW
 from stipple.torus import (
-    CACHED_MODES,
     DEFAULT_EPSILON,
     DERIVATIVE_EPSILON,
-    axis_bandwidths,
     derivative_accuracy,
     halftone_torus,
-    image_coefficients,
-    radial_on_modes,
     sample_image,
     stratified_sample,
+    torus_problem,
+)
+from stipple.torus_spectrum import (
+    CACHED_MODES,
+    axis_bandwidths,
+    image_coefficients,
+    radial_on_modes,
     torus_kernel,
     torus_kernels,
     torus_near_kernel,
-    torus_problem,
     torus_scale,
 )
 from stipple.transforms import torus_modes

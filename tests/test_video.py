@@ -482,7 +482,7 @@ def rms_blur_error(density, points, sigma=4.0):
 
 def test_fixed_class_counts_give_each_ink_its_share_of_the_union():
     from stipple.multiclass import multiclass_problem
-    from stipple.torus import axis_bandwidths, image_coefficients
+    from stipple.torus_spectrum import axis_bandwidths, image_coefficients
 
     y, x = np.mgrid[0:32, 0:48] / 48
     densities = [0.2 + 0.5 * x, 0.6 - 0.3 * y]

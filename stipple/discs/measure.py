@@ -8,7 +8,8 @@ from numpy.polynomial import chebyshev
 from scipy.special import j0, j1
 
 from ..errors import StippleError
-from ..torus import DEFAULT_EPSILON, radial_on_modes
+from ..torus import DEFAULT_EPSILON
+from ..torus_spectrum import radial_on_modes
 from ..transforms import torus_modes
 
 # The factors cover radii up to HEADROOM times the largest radius seen; rebuilt when a radius grows beyond.
@@ -112,7 +113,7 @@ class DiscDiscrepancy:
     kernel : numpy.ndarray
         ``K_n`` on that grid, ``K_0`` included (the mass term).
     target : numpy.ndarray
-        ``w_n`` of the ink density on that grid (``stipple.torus.image_coefficients``).
+        ``w_n`` of the ink density on that grid (``stipple.torus_spectrum.image_coefficients``).
     scale : array_like
         Physical side lengths ``(W/L, H/L)`` of the torus.
     epsilon : float

@@ -58,15 +58,8 @@ from ..kernels import ball_kernel
 from ..nufft import BACKENDS, make_nufft
 from ..optimize import BETAS, minimize
 from ..sampling import stratified_sample
-from ..torus import (
-    DEFAULT_EPSILON,
-    axis_bandwidths,
-    check_weights,
-    default_bandwidth,
-    image_coefficients,
-    torus_kernel,
-    torus_scale,
-)
+from ..torus import DEFAULT_EPSILON, check_weights, default_bandwidth
+from ..torus_spectrum import axis_bandwidths, image_coefficients, torus_kernel, torus_scale
 from .measure import (
     DiscDiscrepancy,
     DiscFactors,

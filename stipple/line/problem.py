@@ -24,7 +24,8 @@ from ..halftone import MAX_BANDWIDTH, Problem, check_count, darkest_level
 from ..manifolds import Rectangle
 from ..nearfield import NearField, TorusPairs
 from ..objective import SumObjective
-from ..torus import check_weights, torus_near_kernel, torus_problem, torus_scale
+from ..torus import check_weights, torus_problem
+from ..torus_spectrum import torus_near_kernel, torus_scale
 from .start import MIN_CURVE_VERTICES, initial_loop
 from .terms import CurveNodes, SpeedConstraint, curve_neighbours
 

@@ -90,7 +90,7 @@ def exact_blurs(weights, points, sigma, threads=1):
     where ``G`` falls below 1e-8, and evaluated at the pixel centres by NUFFTs. Returns two ``(H, W)`` arrays.
     """
     from ..nufft import make_nufft
-    from ..torus import image_coefficients
+    from ..torus_spectrum import image_coefficients
     from ..transforms import torus_modes
 
     rows, columns = weights.shape
