@@ -153,22 +153,21 @@ def tone_hints(weights, options):
     tones that the plotter style cannot reach (unless --quiet; -M auto says it itself)."""
     if options["quiet"]:
         return
-    import numpy as np
 
-    from ..io.images import clips_a_feature
+    from ..io.images import faint_span
 
     given_count_hint(weights, options)
     if options["levels"] is not None or options["invert"]:
         return
 
-    low, high = np.percentile(weights, [0.5, 99.5])
-    # A page of one gray with small marks (the same value at both percentiles) has nothing for --levels auto; a
-    # spot on a plain page (the levels are the extremes there) is no faint image; a dark photo gets the hint
-    # below instead (stretched, its few highlights went white and the rest lighter).
+    # A page of one gray with small marks or a soft spot, and a plain gray with noise, have nothing for --levels
+    # auto (``faint_span``); a dark photo gets the hint below instead (stretched, its few highlights went white and
+    # the rest lighter).
     dark = weights.mean() > DARK_MEAN
-    if not dark and low < high and high - low < FAINT_SPAN and not clips_a_feature(weights, low, high):
+    span = None if dark else faint_span(weights, FAINT_SPAN)
+    if span is not None:
         click.echo(
-            f"stipple: note: the image's gray values span only {high - low:.0%} of the range; drawn as they are "
+            f"stipple: note: the image's gray values span only {span:.0%} of the range; drawn as they are "
             "(--levels auto stretches them to black and white: docs/picture.md)",
             err=True,
         )

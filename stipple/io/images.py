@@ -276,12 +276,54 @@ def auto_levels(gray, what="the image"):
     return float(low), float(high)
 
 
+# A plain page with marks: fewer than this share of its pixels differ from its gray by more than their noise.
+PLAIN_SHARE = 0.02
+# A faint image's gray values span more than this many times its pixels' noise (a plain gray's noise is no
+# picture) and at least this share of the range: stretched, a span of a few 8-bit steps shows them as bands (a
+# held-out light gray of 0.85 +- 0.01 came out dark and banded under --levels auto).
+NOISE_SPANS, FAINT_LEAST = 8.0, 0.1
+
+
 def clips_a_feature(values, low, high):
-    """Whether what lies beyond ``[low, high]`` differs from the rest more than the rest varies within it: a small
-    dark spot on a plain page, which percentiles would clip and widen to a black disc."""
+    """Whether what lies beyond ``[low, high]`` is a feature that the percentiles would clip and widen (a small dark
+    spot on a plain page became a black disc): it differs from the rest more than the rest varies within it, or the
+    rest is a plain page (``plain_page``) and it reaches farther beyond than ``high - low`` (a soft spot, whose tail
+    varies within)."""
     beyond = np.sum(np.maximum(values - high, 0.0)) + np.sum(np.maximum(low - values, 0.0))
+    if not beyond > 0:
+        return False
     within = np.clip(values, low, high)
-    return bool(beyond > np.sum(np.abs(within - np.median(within))))
+    if beyond > np.sum(np.abs(within - np.median(within))):
+        return True
+    reach = max(np.max(values) - high, low - np.min(values))
+    return bool(reach > high - low and plain_page(values))
+
+
+def plain_page(values):
+    """Whether all but ``PLAIN_SHARE`` of the pixels lie within three times their noise (``pixel_noise``; at least
+    one 8-bit step) of the median gray."""
+    tolerance = max(3 * pixel_noise(values), 1 / 255)
+    return bool(np.mean(np.abs(values - np.median(values)) > tolerance) < PLAIN_SHARE)
+
+
+def pixel_noise(values):
+    """The pixels' noise: the standard deviation that the median absolute difference of neighbouring pixels implies
+    (edges and smooth gradients hardly count; 0 on a plain page), from about 2^22 differences at most."""
+    step = -(-values.size // 2**22)
+    differences = np.concatenate([np.diff(values[::step], axis=1).ravel(), np.diff(values[:, ::step], axis=0).ravel()])
+    if differences.size == 0:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(differences)) / np.sqrt(2))
+
+
+def faint_span(values, widest):
+    """The span of the gray values (0.5th to 99.5th percentile) where ``--levels auto`` would help, else None: less
+    than ``widest``, at least ``FAINT_LEAST``, more than ``NOISE_SPANS`` times the pixels' noise (stretched, a plain
+    gray's noise became a dark speckle) and clipping no feature (``clips_a_feature``)."""
+    low, high = np.percentile(values, [0.5, 99.5])
+    span = float(high - low)
+    faint = FAINT_LEAST <= span < widest and span > NOISE_SPANS * pixel_noise(values)
+    return span if faint and not clips_a_feature(values, low, high) else None
 
 
 def check_levels(levels):
