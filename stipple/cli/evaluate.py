@@ -9,7 +9,7 @@ import click
 from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from ..io.sources import PICTURE_EXTENSIONS
-from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED
+from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED, MAX_POINTS
 from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
 from .supervise import guarded_files
 from .values import FiniteFloatRange
@@ -54,7 +54,7 @@ from .values import FiniteFloatRange
 @click.option(
     "--floyd-steinberg",
     "fs_dots",
-    type=click.IntRange(min=1),
+    type=click.IntRange(min=1, max=MAX_POINTS),
     default=None,
     help="Pictures: also measure Floyd-Steinberg error diffusion with about this many dots.",
 )

@@ -5,6 +5,7 @@ Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 / 1
 signal removes every temporary file and leaves every output whole or untouched). Every error is one line.
 """
 
+import os
 import signal
 import sys
 
@@ -34,8 +35,10 @@ class StippleGroup(click.Group):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         reuse_freed_memory()
+        open_standard_streams()
         try:
             with SIGNALS:
+                check_thread_variables(sys.argv[1:] if args is None else args)
                 code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except click.UsageError as error:
             hint = f" (see '{error.ctx.command_path} --help')" if error.ctx is not None else ""
@@ -58,6 +61,38 @@ class StippleGroup(click.Group):
             _error_line(f"stipple: stopped by {name}; outputs are whole or untouched, no temporary file left")
             sys.exit(128 + interruption.number)
         sys.exit(code if isinstance(code, int) else 0)
+
+
+def open_standard_streams():
+    """``/dev/null`` on a standard descriptor (0, 1, 2) that the command was started without: a closed stderr's
+    number went to the first file the run opened, an output's temporary, which then took the messages (and the
+    run failed without a word). stderr's messages go nowhere then; a closed stdout stays refused for ``-``."""
+    for number, flags in ((0, os.O_RDONLY), (1, os.O_WRONLY), (2, os.O_WRONLY)):
+        try:
+            os.fstat(number)
+        except OSError:
+            opened = os.open(os.devnull, flags)
+            if opened != number:
+                os.dup2(opened, number)
+                os.close(opened)
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (for the whole process)
+
+
+# The thread counts the transform libraries read from the environment: ducc0 stopped the run with a traceback
+# on a value that is not a whole number (-1, 1.5, "4,2", empty).
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "DUCC0_NUM_THREADS")
+
+
+def check_thread_variables(args):
+    """Refuse, in one line, a thread count in the environment that is not a whole number >= 0 (not for ``--help``
+    or ``--version``, which run nothing)."""
+    if {"--help", "-h", "--version"} & set(args):
+        return
+    for name in THREAD_VARIABLES:
+        value = os.environ.get(name)
+        if value is not None and not value.strip().isdigit():
+            raise click.ClickException(f"{name} must be a whole number of threads (or unset), not {value!r}")
 
 
 def _error_line(text):

@@ -61,20 +61,22 @@ class Interrupted(BaseException):
 class SignalGuard:
     """SIGINT / SIGTERM / SIGHUP (``taken_signals``) for the whole command.
 
-    While the optimiser runs (``deferred``) the first signal only asks it to stop after the current
-    iteration, so that the checkpoint and the outputs reached so far are written; any other signal
+    While the optimiser runs (``deferred``, from its first callback on) the first signal only asks it to stop after
+    the current iteration, so that the checkpoint and the outputs reached so far are written; any other signal
     raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143 / 129);
-    signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short.
+    signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short. Before the
+    first callback (the input still being read: a pipe with no writer yet) a signal interrupts at once.
     """
 
     def __init__(self):
         self.signal = None
         self.deferring = False
+        self.started = False
         self.unwinding = False
         self._previous = {}
 
     def __enter__(self):
-        self.signal, self.deferring, self.unwinding = None, False, False
+        self.signal, self.deferring, self.started, self.unwinding = None, False, False, False
         for number in taken_signals():
             try:
                 self._previous[number] = signal.signal(number, self._handle)
@@ -92,7 +94,7 @@ class SignalGuard:
         self._previous.clear()
 
     def _handle(self, number, frame):
-        if self.deferring and self.signal is None:
+        if self.deferring and self.started and self.signal is None:
             self.signal = number
             return
         if self.unwinding:  # already on the way out: let the cleanup finish
@@ -102,14 +104,16 @@ class SignalGuard:
 
     @contextlib.contextmanager
     def deferred(self):
-        """Within the block a first signal is only recorded (see ``stop_requested``)."""
-        self.deferring = True
+        """Within the block, once ``stop_requested`` has been called, a first signal is only recorded."""
+        self.deferring, self.started = True, False
         try:
             yield self
         finally:
             self.deferring = False
 
     def stop_requested(self, state):
+        """The optimiser's callback: whether a signal asked it to stop (and from now on signals are deferred)."""
+        self.started = True
         return self.signal is not None
 
 
@@ -118,13 +122,20 @@ SIGNALS = SignalGuard()
 
 def checkpoint_interval(options):
     """``(seconds, iterations)`` of ``--checkpoint-every``, refused when given on the command line without
-    ``--checkpoint`` (it would be ignored; a config file may set it for the runs that checkpoint)."""
+    ``--checkpoint`` (it would be ignored; a config file may set it for the runs that checkpoint); ``--init`` with
+    ``--resume`` is refused too (the resumed run ignored it)."""
     interval = parse_every(options["checkpoint_every"])
-    context = click.get_current_context(silent=True)
-    source = None if context is None else context.get_parameter_source("checkpoint_every")
-    if source is click.core.ParameterSource.COMMANDLINE and options.get("checkpoint") is None:
+    if given_on_command_line("checkpoint_every") and options.get("checkpoint") is None:
         raise StippleError("--checkpoint-every is for --checkpoint: without it, it would be ignored")
+    if given_on_command_line("init") and options.get("resume"):
+        raise StippleError("--init is for a new run: --resume continues from the checkpoint's points")
     return interval
+
+
+def given_on_command_line(name):
+    """Whether the option ``name`` was given on the command line (not by default or a config file)."""
+    context = click.get_current_context(silent=True)
+    return context is not None and context.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
 
 
 def parse_every(text):

@@ -5,6 +5,7 @@ import contextlib
 import os
 import shutil
 import signal
+import stat
 import sys
 import tempfile
 
@@ -41,6 +42,7 @@ def check_writable(path):
         raise StippleError(f"{path}: directory {directory} does not exist")
     if os.path.isdir(path):
         raise StippleError(f"{path}: is a directory")
+    _check_regular(path)
     _check_name_length(path, directory)
     if not os.stat(directory).st_mode & 0o222:  # refused by its mode, as a read-only file is, even for root
         raise StippleError(f"{path}: not writable (the folder {directory} is read-only)")
@@ -228,9 +230,31 @@ def _same_file(first, second):
 
 
 def _check_not_folder(path):
-    """Refuse an output whose place is taken by a folder (or a link to one)."""
+    """Refuse an output whose place is taken by a folder, or by anything else but a file (``_check_regular``)."""
     if os.path.isdir(path):
         raise StippleError(f"{path}: cannot write (it is a folder)")
+    _check_regular(path)
+
+
+# What an output's place may hold besides a file, by ``stat``'s test: renamed over, each became a file.
+_NOT_FILES = (
+    ("a named pipe", stat.S_ISFIFO),
+    ("a device", stat.S_ISCHR),
+    ("a device", stat.S_ISBLK),
+    ("a socket", stat.S_ISSOCK),
+)
+
+
+def _check_regular(path):
+    """Refuse an output whose place is taken by a named pipe, a device or a socket (or a link to one): the finished
+    file renamed over it replaced it, so a reader of the pipe got nothing and a device node became a file."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    for kind, test in _NOT_FILES:
+        if test(mode):
+            raise StippleError(f"{path}: cannot write (it is {kind}, not a regular file)")
 
 
 def _write_temporary(path, data):

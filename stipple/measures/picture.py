@@ -288,16 +288,23 @@ def _dither_cube(image):
     return dithered, int(np.count_nonzero(np.any(np.asarray(dithered) < 255, axis=2)))
 
 
+# The most pixels a Floyd-Steinberg baseline dithers (``_search_scale``): asked for 10^8 dots of a 48 x 32 picture,
+# it grew its scaled image to 2.4 GB; fewer dots than asked come back where the bound stops it.
+MAX_DITHER_PIXELS = 2**24
+
+
 def _search_scale(image, count, dither):
-    """``dither`` of ``image`` at the scale whose ink pixels are closest to ``count`` (eight tries)."""
+    """``dither`` of ``image`` at the scale whose ink pixels are closest to ``count`` (eight tries), at most
+    ``MAX_DITHER_PIXELS`` pixels."""
     columns, rows = image.size
-    scale, best = 1.0, None
+    largest = np.sqrt(MAX_DITHER_PIXELS / (columns * rows))
+    scale, best = min(1.0, largest), None
     for _ in range(8):
         size = (max(round(columns * scale), 1), max(round(rows * scale), 1))
         dithered, dots = dither(image.resize(size, Image.Resampling.LANCZOS))
         if best is None or abs(dots - count) < abs(best[1] - count):
             best = (dithered, dots)
-        if dots in (count, 0):
+        if dots in (count, 0) or (dots < count and scale >= largest):
             break
-        scale *= np.sqrt(count / dots)
+        scale = min(scale * np.sqrt(count / dots), largest)
     return best
