@@ -342,6 +342,26 @@ def test_outputs_that_fail_to_open_leave_no_temporary(tmp_path, monkeypatch):
     assert not list(tmp_path.iterdir())
 
 
+def test_a_broken_animated_gif_is_refused_not_cut_short(tmp_path):
+    """FFmpeg decoded a truncated or corrupt GIF as far as it went, without an error: 2 or 1 of its 3 frames,
+    exit 0 (a hostile sweep), where stipple torus refused the same file with Pillow's words."""
+    pytest.importorskip("av")
+    frames = [Image.fromarray(np.round(255 * gray).astype(np.uint8)) for gray in moving_disc(3)]
+    frames[0].save(tmp_path / "whole.gif", save_all=True, append_images=frames[1:], duration=100, loop=0)
+    whole = (tmp_path / "whole.gif").read_bytes()
+    (tmp_path / "cut.gif").write_bytes(whole[: len(whole) // 2])
+    corrupt = bytearray(whole)
+    corrupt[len(whole) // 3 : len(whole) // 3 + 40] = bytes(range(40))
+    (tmp_path / "corrupt.gif").write_bytes(bytes(corrupt))
+    for name in ("cut.gif", "corrupt.gif"):
+        result = video(tmp_path / name, "-M", 60, "-N", 12, "--iterations", 2, "-o", tmp_path / "d.csv")
+        assert result.exit_code == 1 and "a broken GIF" in result.output, result.output
+        assert len(result.output.strip().splitlines()) == 1 and not (tmp_path / "d.csv").exists()
+    result = video(tmp_path / "whole.gif", "-M", 60, "-N", 12, "--iterations", 2, "-o", tmp_path / "d.csv")
+    assert result.exit_code == 0, result.output
+    assert len((tmp_path / "d.csv").read_text().splitlines()) == 1 + 3 * 60
+
+
 def test_an_mp4_whose_stream_failed_to_open_closes(tmp_path):
     """The container was open but its stream was not: close() then raised AttributeError (on None.encode) over the
     first error (a hostile --fps nan, now refused where it enters)."""
