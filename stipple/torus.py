@@ -1,4 +1,5 @@
-"""Halftoning on the torus: an image's exact Fourier coefficients, the ball-discrepancy kernel, sampling."""
+"""Halftoning on the torus: the problem (default bandwidth, stiffness field, objective) and the run; its Fourier
+side (an image's exact coefficients, the ball-discrepancy kernel) is ``stipple.torus_spectrum``."""
 
 import os
 from functools import partial

@@ -21,7 +21,8 @@ from stipple.multilevel import (
 )
 from stipple.sphere import sphere_problem
 from stipple.sphere_density import CellMap
-from stipple.torus import stiffness_field, torus_problem, torus_scale
+from stipple.torus import stiffness_field, torus_problem
+from stipple.torus_spectrum import torus_scale
 from stipple.transforms import spherical_angles
 
 

@@ -21,6 +21,21 @@ def stipple(*args, cwd, **keywords):
     return subprocess.run([*STIPPLE, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=120, **keywords)
 
 
+def wait_for_the_pipe(pid, seconds=30.0):
+    """Until the process waits for a writer to open its FIFO (Linux's wait channel), or ``seconds`` have passed."""
+    deadline = time.monotonic() + seconds
+    channel = f"/proc/{pid}/wchan"
+    while time.monotonic() < deadline:
+        try:
+            with open(channel) as stream:
+                if "wait_for_partner" in stream.read():
+                    return
+        except OSError:
+            time.sleep(2.0)  # no such file: no /proc here
+            return
+        time.sleep(0.05)
+
+
 def taking_signals():
     """The child's SIGINT and SIGTERM at their defaults: a test run in this process may leave them ignored (the
     signal guard ignores them after a signal), and a child would inherit that, as from ``nohup``."""
@@ -40,7 +55,7 @@ def test_one_signal_stops_a_run_still_waiting_for_its_input(tmp_path, kind, code
         text=True,
         preexec_fn=taking_signals,
     )
-    time.sleep(2.0)  # the interpreter started and blocked in the read
+    wait_for_the_pipe(process.pid)
     process.send_signal(kind)
     try:
         stderr = process.communicate(timeout=20)[1]
@@ -76,7 +91,7 @@ def test_a_closed_stderr_neither_fails_the_run_nor_reaches_its_outputs(tmp_path)
     assert lines[0] == "x,y" and len(lines) == 31
 
 
-@pytest.mark.parametrize("value", ["-1", "abc", "", "4,2", "1.5"])
+@pytest.mark.parametrize("value", ["-1", "abc", "", "4,2", "1.5", "²"])
 def test_a_thread_count_in_the_environment_that_is_no_whole_number_gets_one_line(tmp_path, value):
     make_image(tmp_path / "in.png")
     done = stipple("torus", "in.png", *FAST, "-o", "a.csv", cwd=tmp_path, env={**os.environ, "OMP_NUM_THREADS": value})
@@ -84,6 +99,8 @@ def test_a_thread_count_in_the_environment_that_is_no_whole_number_gets_one_line
     assert len(done.stderr.strip().splitlines()) == 1 and not (tmp_path / "a.csv").exists()
     helped = stipple("torus", "--help", cwd=tmp_path, env={**os.environ, "OMP_NUM_THREADS": value})
     assert helped.returncode == 0
+    signed = stipple("torus", "in.png", *FAST, "-o", "a.csv", cwd=tmp_path, env={**os.environ, "OMP_NUM_THREADS": "+1"})
+    assert signed.returncode == 0, signed.stderr  # what ducc0 takes is taken
 
 
 def test_the_floyd_steinberg_baseline_is_bounded():

@@ -362,6 +362,29 @@ def test_a_broken_animated_gif_is_refused_not_cut_short(tmp_path):
     assert len((tmp_path / "d.csv").read_text().splitlines()) == 1 + 3 * 60
 
 
+def test_a_signal_while_a_resumed_run_replays_its_frames_lets_them_be_written(tmp_path):
+    """A resumed run writes its checkpoint's frames again before any optimiser step: a first signal then only asks
+    it to stop, as once the optimiser runs (a code review: after the change that lets a first signal stop a run
+    still reading its input at once, the replayed frames were thrown away)."""
+    import subprocess
+    import sys
+
+    from test_safety_signals import CHILD
+
+    source = frames_folder(tmp_path / "in", moving_disc(6))
+    common = ["video", str(source), "-M", str(COUNT), "-N", str(BANDWIDTH), "-q", "--threads", "1"]
+    checkpoint = ["--checkpoint", str(tmp_path / "run.npz")]
+    assert video(*common[1:-3], *checkpoint, "--stop", 3, "-o", tmp_path / "a.csv").exit_code == 0
+    (tmp_path / "f").mkdir()
+    outputs = ["-o", str(tmp_path / "b.csv"), "-o", str(tmp_path / "f/%d.png")]
+    # The resumed run fsyncs the CSV's reserved temporary, then the first replayed frame's PNG: SIGINT right after.
+    arguments = [sys.executable, "-c", CHILD, "fsync", "2", "SIGINT", *common, *checkpoint, "--resume", *outputs]
+    done = subprocess.run(arguments, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 130 and "outputs written" in done.stderr, done.stderr
+    assert len((tmp_path / "b.csv").read_text().splitlines()) >= 1 + 3 * COUNT
+    assert {path.name for path in (tmp_path / "f").iterdir()} >= {"0.png", "1.png", "2.png"}
+
+
 def test_an_mp4_whose_stream_failed_to_open_closes(tmp_path):
     """The container was open but its stream was not: close() then raised AttributeError (on None.encode) over the
     first error (a hostile --fps nan, now refused where it enters)."""

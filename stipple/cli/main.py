@@ -1,11 +1,13 @@
 """The ``stipple`` command group: every error as one line on stderr, signals unwound cleanly, and the commands.
 
 Exit codes: 0 success; 1 bad data, files or settings; 2 bad usage; 130 / 143 / 129 after SIGINT / SIGTERM / SIGHUP
-(during the optimisation a first signal writes the checkpoint and the outputs reached so far; any other
-signal removes every temporary file and leaves every output whole or untouched). Every error is one line.
+(once the optimisation has begun a first signal writes the checkpoint and the outputs reached so far; before it,
+and for any other signal, every temporary file is removed and every output left whole or untouched). Every error
+is one line.
 """
 
 import os
+import re
 import signal
 import sys
 
@@ -91,7 +93,7 @@ def check_thread_variables(args):
         return
     for name in THREAD_VARIABLES:
         value = os.environ.get(name)
-        if value is not None and not value.strip().isdigit():
+        if value is not None and not re.fullmatch(r"\s*\+?[0-9]+\s*", value):
             raise click.ClickException(f"{name} must be a whole number of threads (or unset), not {value!r}")
 
 

@@ -61,11 +61,11 @@ class Interrupted(BaseException):
 class SignalGuard:
     """SIGINT / SIGTERM / SIGHUP (``taken_signals``) for the whole command.
 
-    While the optimiser runs (``deferred``, from its first callback on) the first signal only asks it to stop after
-    the current iteration, so that the checkpoint and the outputs reached so far are written; any other signal
+    While the optimiser runs (``deferred``, once the work has begun: ``begin``) the first signal only asks it to stop
+    after the current iteration, so that the checkpoint and the outputs reached so far are written; any other signal
     raises ``Interrupted``, which removes temporary files and releases locks on its way out (exit 130 / 143 / 129);
     signals that arrive while it unwinds are ignored, so that the cleanup itself is never cut short. Before the
-    first callback (the input still being read: a pipe with no writer yet) a signal interrupts at once.
+    work begins (the input still being read: a pipe with no writer yet) a signal interrupts at once.
     """
 
     def __init__(self):
@@ -104,16 +104,21 @@ class SignalGuard:
 
     @contextlib.contextmanager
     def deferred(self):
-        """Within the block, once ``stop_requested`` has been called, a first signal is only recorded."""
+        """Within the block, once the work has begun (``begin``), a first signal is only recorded."""
         self.deferring, self.started = True, False
         try:
             yield self
         finally:
             self.deferring = False
 
-    def stop_requested(self, state):
-        """The optimiser's callback: whether a signal asked it to stop (and from now on signals are deferred)."""
+    def begin(self):
+        """Mark the work that a first signal lets finish as begun (the optimiser's first state, a video's first
+        frame, replayed or new): from now on a first signal is only recorded."""
         self.started = True
+
+    def stop_requested(self, state):
+        """The optimiser's callback: whether a signal asked it to stop; the run has begun (``begin``)."""
+        self.begin()
         return self.signal is not None
 
 

@@ -237,6 +237,7 @@ def run_frames(frames, settings, outputs, options):
     colour = settings.palette is not None
 
     def on_frame(frame):
+        SIGNALS.begin()  # a frame to write (a resumed run's replayed ones too): a first signal lets them be written
         if colour:
             labels = [name for name, _, part in frame.inks for _ in range(part.stop - part.start)]
             outputs.add(frame.index, frame.points, frame, labels)

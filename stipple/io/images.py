@@ -266,11 +266,11 @@ def stretch_levels(gray, levels):
 
 def auto_levels(gray, what="the image"):
     """``(black, white)`` that ``--levels auto`` stretches to 0 and 1: the 0.5th and 99.5th percentiles, which
-    leave out a scan's specks and noise, or the smallest and largest values where the percentiles would clip a
+    leave out a scan's specks and noise, or the extremes (``robust_extremes``) where the percentiles would clip a
     feature (``clips_a_feature``); a StippleError naming ``what`` where ``gray`` has one value."""
     low, high = np.percentile(gray, [0.5, 99.5])
     if clips_a_feature(gray, low, high):
-        low, high = np.min(gray), np.max(gray)
+        low, high = robust_extremes(gray)
     if not low < high:
         raise StippleError(f"--levels auto: {what} has one gray value ({low:.3g}); nothing to stretch")
     return float(low), float(high)
@@ -299,6 +299,17 @@ def clips_a_feature(values, low, high):
     return bool(reach > high - low and plain_page(values))
 
 
+def robust_extremes(values):
+    """The least and greatest of ``values`` filtered by a 3 x 3 median, which leaves out a scan's specks of up to
+    2 x 2 pixels (one speck on a sparse faint sketch set the plain extremes, and the stretch did nothing), or the
+    plain extremes where nothing else is left (one small mark on a plain page)."""
+    from scipy import ndimage
+
+    filtered = ndimage.median_filter(values, size=3, mode="nearest")
+    low, high = float(filtered.min()), float(filtered.max())
+    return (low, high) if low < high else (float(np.min(values)), float(np.max(values)))
+
+
 def plain_page(values):
     """Whether all but ``PLAIN_SHARE`` of the pixels lie within three times their noise (``pixel_noise``; at least
     one 8-bit step) of the median gray."""
@@ -308,7 +319,7 @@ def plain_page(values):
 
 def pixel_noise(values):
     """The pixels' noise: the standard deviation that the median absolute difference of neighbouring pixels implies
-    (edges and smooth gradients hardly count; 0 on a plain page), from about 2^22 differences at most."""
+    (edges and smooth gradients hardly count; 0 on a plain page), from about 2^22 differences along each axis."""
     step = -(-values.size // 2**22)
     differences = np.concatenate([np.diff(values[::step], axis=1).ravel(), np.diff(values[:, ::step], axis=0).ravel()])
     if differences.size == 0:
@@ -317,13 +328,15 @@ def pixel_noise(values):
 
 
 def faint_span(values, widest):
-    """The span of the gray values (0.5th to 99.5th percentile) where ``--levels auto`` would help, else None: less
-    than ``widest``, at least ``FAINT_LEAST``, more than ``NOISE_SPANS`` times the pixels' noise (stretched, a plain
-    gray's noise became a dark speckle) and clipping no feature (``clips_a_feature``)."""
-    low, high = np.percentile(values, [0.5, 99.5])
-    span = float(high - low)
-    faint = FAINT_LEAST <= span < widest and span > NOISE_SPANS * pixel_noise(values)
-    return span if faint and not clips_a_feature(values, low, high) else None
+    """The span that ``--levels auto`` would stretch (``auto_levels``) where that helps, else None: less than
+    ``widest``, at least ``FAINT_LEAST`` and more than ``NOISE_SPANS`` times the pixels' noise (stretched, a plain
+    gray's noise became a dark speckle). A spot on a plain page spans the whole range there: no hint."""
+    try:
+        black, white = auto_levels(values)
+    except StippleError:  # one gray value
+        return None
+    span = white - black
+    return span if FAINT_LEAST <= span < widest and span > NOISE_SPANS * pixel_noise(values) else None
 
 
 def check_levels(levels):
