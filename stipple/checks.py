@@ -39,3 +39,13 @@ def check_hooks(callback, checkpoint):
         raise StippleError(f"callback must be a function of the CG state, not {callback!r}")
     if checkpoint is not None and (not isinstance(checkpoint, (str, os.PathLike)) or os.path.isdir(checkpoint)):
         raise StippleError(f"checkpoint must be the path of a file, not {checkpoint!r}")
+
+
+def two_numbers(pair, name, form):
+    """``pair`` as two floats, or a StippleError naming ``name`` and its ``form`` (5, (1, 2, 3) and ("a", "b")
+    failed in Python's words)."""
+    try:
+        first, second = (float(value) for value in pair)
+    except (TypeError, ValueError):
+        raise StippleError(f"{name} must be two numbers {form}, not {pair!r}") from None
+    return first, second

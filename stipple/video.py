@@ -32,7 +32,7 @@ from .halftone import (
     iid_gradient_norm,
     run,
 )
-from .io.video import frame_fingerprint
+from .io.video_checkpoint import frame_fingerprint
 from .manifolds import PinnedTorus
 from .sampling import pixel_indices
 from .torus import DEFAULT_EPSILON, default_bandwidth, periodic_blur, torus_problem

@@ -6,7 +6,7 @@ import time
 
 from .colour import palette_label
 from .errors import StippleError
-from .io.video import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
+from .io.video_checkpoint import frame_fingerprint, load_video_checkpoint, save_video_checkpoint
 
 
 class FrameKeeper:

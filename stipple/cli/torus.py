@@ -154,7 +154,7 @@ def tone_hints(weights, options):
     if options["quiet"]:
         return
 
-    from ..io.images import faint_span
+    from ..io.levels import faint_span
 
     given_count_hint(weights, options)
     if options["levels"] is not None or options["invert"]:

@@ -3,13 +3,10 @@ the outputs of a stippled video (a ``frame,x,y`` CSV, MP4 and one PNG or SVG per
 the video checkpoint (pickle-free ``.npz``)."""
 
 import glob
-import hashlib
 import io
-import json
 import os
 import re
 import tempfile
-import zipfile
 from dataclasses import dataclass
 from functools import partial
 
@@ -17,9 +14,9 @@ import numpy as np
 from PIL import Image
 
 from ..errors import StippleError
-from .archive import MemberReader, open_archive
-from .commit import StagedOutputs, atomic_write, write_stdout
-from .images import auto_levels, check_grid, image_colour, image_density, load_array, load_colour, load_density
+from .commit import StagedOutputs, write_stdout
+from .images import check_grid, image_colour, image_density, load_array, load_colour, load_density
+from .levels import auto_levels
 from .mp4 import Mp4Stream, error_reason, require_av
 from .sources import PICTURE_EXTENSIONS, check_regular_file, read_source
 
@@ -232,11 +229,6 @@ def _check_size(name, shape):
         )
 
 
-def frame_fingerprint(density):
-    """SHA-256 of a frame's density (what a checkpoint compares on resume)."""
-    return hashlib.sha256(np.ascontiguousarray(density, dtype=np.float64).tobytes()).hexdigest()
-
-
 def check_frame_pattern(path):
     """``path`` if it is a frame pattern (one ``%d``, ``%04d``, ...; ``.png`` or ``.svg``), else a StippleError."""
     text = str(path)
@@ -387,63 +379,3 @@ def _write(stream, path, data):
         stream.write(data)
     except OSError as error:
         raise StippleError(f"{path}: cannot write ({error.strerror or error})") from None
-
-
-CHECKPOINT_FORMAT = "stipple-video-checkpoint"
-CHECKPOINT_VERSION = 1
-MAX_METADATA_BYTES = 1 << 24
-
-
-def save_video_checkpoint(path, points, settings, indices, fingerprints):
-    """Write the finished frames (``points`` of shape ``(K, M, 2)``, their source ``indices`` and density
-    ``fingerprints``) and the run's ``settings`` to ``path`` atomically, as a pickle-free ``.npz``."""
-    metadata = {
-        "format": CHECKPOINT_FORMAT,
-        "version": CHECKPOINT_VERSION,
-        "settings": settings,
-        "indices": [int(index) for index in indices],
-        "fingerprints": list(fingerprints),
-    }
-    buffer = io.BytesIO()
-    np.savez(buffer, metadata=np.asarray(json.dumps(metadata)), points=np.asarray(points, dtype=np.float64))
-    atomic_write(path, buffer.getvalue())
-
-
-def load_video_checkpoint(path, settings):
-    """``(points, indices, fingerprints)`` of a video checkpoint for a run with ``settings``; refuses files that are
-    damaged, foreign, or for other settings. Nothing is unpickled and every member's size is checked first."""
-    try:
-        with open_archive(path) as archive:
-            reader = MemberReader(path, archive, "not a video checkpoint", "damaged video checkpoint")
-            metadata = _checkpoint_metadata(path, reader.value("metadata", MAX_METADATA_BYTES, "U"))
-            for key, value in settings.items():
-                if metadata["settings"].get(key) != value:
-                    raise StippleError(
-                        f"{path}: checkpoint is for another run: {key} was "
-                        f"{metadata['settings'].get(key)!r}, now {value!r}"
-                    )
-            frames, count = len(metadata["indices"]), settings["points"]
-            points = reader.value("points", 16 * frames * count, "f").astype(np.float64)
-    except FileNotFoundError:
-        raise StippleError(f"{path}: no checkpoint to resume") from None
-    except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError, RuntimeError) as error:
-        raise StippleError(f"{path}: not a video checkpoint, or damaged ({error_reason(error)})") from None
-    if points.shape != (frames, count, 2) or not np.all((points >= 0) & (points <= 1)):
-        raise StippleError(f"{path}: damaged video checkpoint (points of shape {points.shape} or outside [0, 1])")
-    return points, metadata["indices"], metadata["fingerprints"]
-
-
-def _checkpoint_metadata(path, text):
-    try:
-        metadata = json.loads(str(text[()]))
-    except (TypeError, ValueError, RecursionError):
-        raise StippleError(f"{path}: damaged video checkpoint metadata") from None
-    if not isinstance(metadata, dict) or metadata.get("format") != CHECKPOINT_FORMAT:
-        raise StippleError(f"{path}: not a video checkpoint")
-    if metadata.get("version") != CHECKPOINT_VERSION:
-        raise StippleError(f"{path}: video checkpoint version {metadata.get('version')!r} is not {CHECKPOINT_VERSION}")
-    indices, prints = metadata.get("indices"), metadata.get("fingerprints")
-    valid = isinstance(metadata.get("settings"), dict) and isinstance(indices, list) and isinstance(prints, list)
-    if not valid or len(indices) != len(prints) or not all(isinstance(i, int) for i in indices):
-        raise StippleError(f"{path}: damaged video checkpoint metadata")
-    return metadata
