@@ -10,7 +10,7 @@ from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from ..io.sources import PICTURE_EXTENSIONS
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED, MAX_POINTS
-from .options import check_extension, check_longitude, click_error, parse_levels, warn_outside
+from .options import check_extension, check_longitude, click_error, given_on_command_line, parse_levels, warn_outside
 from .supervise import guarded_files
 from .values import FiniteFloatRange
 
@@ -201,11 +201,7 @@ def refuse_foreign_options(kind):
     messages of their own (a picture's for points, --bandwidth for pictures, ...) are left to them."""
     context = click.get_current_context()
     applies = APPLIES.get(kind, set(context.params) - PLOTTER_OPTIONS)
-    given = [
-        name
-        for name in context.params
-        if name not in applies and context.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
-    ]
+    given = [name for name in context.params if name not in applies and given_on_command_line(context, name)]
     if given:
         flags = [_flag(context, name) for name in given]
         raise click.ClickException(f"{', '.join(flags)}: not for {KINDS[kind]}; it would be ignored")

@@ -359,6 +359,12 @@ def is_default(ctx, name):
     return ctx.get_parameter_source(name) is click.core.ParameterSource.DEFAULT
 
 
+def given_on_command_line(ctx, name):
+    """Whether option ``name`` was given on the command line (not by default, the environment or a config file);
+    False without a context."""
+    return ctx is not None and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
+
+
 def check_longitude(name, value):
     """A finite longitude in [-360, 360] degrees."""
     if not -360 <= value <= 360:

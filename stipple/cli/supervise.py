@@ -16,6 +16,7 @@ from ..errors import StippleError
 from ..io.commit import FORMATS, check_writable, commit_outputs, output_format, taken_signals
 from ..io.safety import CheckpointLock, check_distinct
 from .defaults import MAX_ITERATIONS
+from .options import given_on_command_line
 
 
 class Progress:
@@ -130,17 +131,12 @@ def checkpoint_interval(options):
     ``--checkpoint`` (it would be ignored; a config file may set it for the runs that checkpoint); ``--init`` with
     ``--resume`` is refused too (the resumed run ignored it)."""
     interval = parse_every(options["checkpoint_every"])
-    if given_on_command_line("checkpoint_every") and options.get("checkpoint") is None:
+    context = click.get_current_context(silent=True)
+    if given_on_command_line(context, "checkpoint_every") and options.get("checkpoint") is None:
         raise StippleError("--checkpoint-every is for --checkpoint: without it, it would be ignored")
-    if given_on_command_line("init") and options.get("resume"):
+    if given_on_command_line(context, "init") and options.get("resume"):
         raise StippleError("--init is for a new run: --resume continues from the checkpoint's points")
     return interval
-
-
-def given_on_command_line(name):
-    """Whether the option ``name`` was given on the command line (not by default or a config file)."""
-    context = click.get_current_context(silent=True)
-    return context is not None and context.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
 
 
 def parse_every(text):
