@@ -240,10 +240,12 @@ def test_a_picture_in_another_raster_format_measures_as_its_png(tmp_path, suffix
         (lambda d: (d / "bad.png").write_bytes(b"not a png") and d / "bad.png", "cannot decode"),
         (lambda d: save(d / "wide.png", ramp(10, 64)), "not the same width : height"),
         (lambda d: save(d / "small.png", ramp(3, 2)), "not the same width : height"),  # a row off the rounding
+        (lambda d: save(d / "globe.png", ramp(48, 48)), "draw the points with --projection equirect"),
     ],
 )
 def test_evaluate_refuses_a_bad_picture_in_one_line(tmp_path, make, message):
-    source = save(tmp_path / "in.png", ramp())
+    """A square picture of a 2:1 map is a globe of stipple sphere: the line says how to measure it instead."""
+    source = save(tmp_path / "in.png", ramp(48, 96))
     result = evaluate(make(tmp_path), source)
     assert result.exit_code == 1 and message in result.output
     assert len(result.output.strip().splitlines()) == 1
