@@ -181,6 +181,9 @@ def _metadata(path, text):
         )
     if not isinstance(metadata.get("settings"), dict) or not isinstance(metadata.get("fingerprint"), str):
         raise StippleError(f"{path}: corrupt checkpoint metadata (settings or fingerprint)")
+    # The domain names the command in a message (a list there raised TypeError; a hostile sweep).
+    if not isinstance(metadata["settings"].get("domain"), str):
+        raise StippleError(f"{path}: corrupt checkpoint metadata (its domain is not a name)")
     return metadata
 
 
@@ -197,7 +200,10 @@ def _check_matches(path, metadata, problem):
         differ.sort(key=_naming_order)
         what = SETTING_NAMES.get(differ[0], differ[0])
         if differ[0] in ("points", "shape"):
-            what = "the map, -M or a design's -t" if saved.get("domain") == "sphere" else "the image or -M"
+            # A line's points are its quadrature nodes, which --length changes too (a hostile sweep was told -M).
+            what = {"sphere": "the map, -M or a design's -t", "line": "the image, -M or --length"}.get(
+                saved.get("domain"), "the image or -M"
+            )
         details = "; ".join(f"{key} was {_short(saved.get(key))}, now {current.get(key)!r}" for key in differ[:2])
         raise StippleError(
             f"{path}: checkpoint is for a different run: {what} differs ({details}); "
@@ -212,7 +218,7 @@ def _check_matches(path, metadata, problem):
 # What a checkpoint's other settings are on the command line, and the order in which a change is named: the
 # options first, the settings they change after them (FIRST_NAMED, then any other, then LAST_NAMED).
 SETTING_NAMES = {
-    "bandwidth": "-N (the bandwidth)",
+    "bandwidth": "-N (the bandwidth; without -N it follows the image, its --invert, --gamma or --levels, and -M)",
     "length": "--length (the line's length)",
     "separation": "--palette",
     "black": "--black",
@@ -225,9 +231,23 @@ SETTING_NAMES = {
     "kernel": "--kernel",
     "near_field": "--near-field / --no-near-field",
     "hessian": "--hessian",
+    # A line's own settings, which follow the options (named before them).
+    "subdivisions": "the line's nodes (they follow -M and --length)",
+    "margin": "the line's blank margin (it follows --length)",
+    "exclude": "the line's near field (it follows -N and --length)",
 }
 FIRST_NAMED = ["separation", "black", "classes", "order", "points", "shape", "length", "kernel", "near_field"]
-LAST_NAMED = ["term_weights", "class_points", "metric", "class_bandwidths", "bandwidth", "class_fingerprint"]
+LAST_NAMED = [
+    "term_weights",
+    "class_points",
+    "metric",
+    "class_bandwidths",
+    "bandwidth",
+    "class_fingerprint",
+    "subdivisions",
+    "margin",
+    "exclude",
+]
 
 
 def _naming_order(key):

@@ -152,7 +152,7 @@ def evaluate(
 
 def report_files(report, json_path, spectrum_path):
     """``(path, bytes)`` of the points' report: the spectrum's plot, the JSON, and the text on stdout (unless the
-    JSON goes there)."""
+    JSON or the plot goes there: a PNG followed by text was no PNG)."""
     from ..io.png import spectrum_plot
     from ..measures.reports import format_report
 
@@ -164,7 +164,7 @@ def report_files(report, json_path, spectrum_path):
         )
     if json_path is not None:
         files.append((json_path, (json.dumps(report, indent=2) + "\n").encode()))
-    if json_path != "-":
+    if "-" not in (json_path, spectrum_path):
         files.append(("-", (format_report(report) + "\n").encode()))
     return files
 

@@ -74,7 +74,7 @@ def render(
     from ..pipelines.inputs import read_points, torus_canvas
     from ..pipelines.outputs import sphere_files, torus_files
     from ..pipelines.pen import placement_density
-    from ..render.dots import sphere_canvas
+    from ..render.dots import sphere_canvas, sphere_png_layers
     from ..render.pen import physical_centres
     from ..sphere import lon_lat
 
@@ -114,7 +114,8 @@ def render(
                         "--like and --size are for torus points (an image's x,y); sphere points are drawn with "
                         "even dots: for a map's tone, give stipple sphere the outputs"
                     )
-                check_png_outputs(formats, sphere_canvas(projection), png_width, len(points))
+                layers = sphere_png_layers(projection, (settings["color"], settings["background"]))
+                check_png_outputs(formats, sphere_canvas(projection), png_width, len(points), layers)
                 points = plot_order(points, points, options, "radians")
                 degrees = lon_lat(points)
                 files = sphere_files(

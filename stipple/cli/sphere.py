@@ -70,7 +70,7 @@ def sphere(ctx, map_source, **options):
     from ..pipelines.inputs import read_sphere_init
     from ..pipelines.outputs import sphere_files
     from ..pipelines.pen import sphere_pen_density
-    from ..render.dots import sphere_canvas
+    from ..render.dots import sphere_canvas, sphere_png_layers
     from ..sphere import DESIGN_TOL, default_bandwidth, lon_lat, picture_darkness, sphere_density, sphere_problem
     from ..torus import DERIVATIVE_EPSILON
 
@@ -82,7 +82,9 @@ def sphere(ctx, map_source, **options):
         layout = None if options["uniform"] or str(map_source).startswith("builtin:") else lon0
         view = parse_view(options["view"] or default_view(options["projection"], layout), options["projection"])
         formats = [output_format(path) for path in options["outputs"]]
-        check_png_outputs(formats, sphere_canvas(options["projection"]), options["png_width"], options["n_points"])
+        projection = options["projection"]
+        layers = sphere_png_layers(projection, (settings["color"], settings["background"]))
+        check_png_outputs(formats, sphere_canvas(projection), options["png_width"], options["n_points"], layers)
         inputs = [("map", map_source), init_input(options["init"])]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             density = sphere_density(

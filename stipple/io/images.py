@@ -3,6 +3,7 @@
 import io
 import math
 import re
+import tokenize
 import warnings
 
 import numpy as np
@@ -125,10 +126,12 @@ def _npy_header(data, name):
         stream.seek(-length_bytes, io.SEEK_CUR)
         reader = np.lib.format.read_array_header_1_0 if major == 1 else np.lib.format.read_array_header_2_0
         shape, fortran, dtype = reader(stream, max_header_size=MAX_NPY_HEADER)
-    except (ValueError, TypeError, SyntaxError, OverflowError, EOFError, UnicodeError) as error:
+    # numpy parses the header with Python's tokenizer: an unclosed bracket raised its TokenError (a hostile sweep).
+    except (ValueError, TypeError, SyntaxError, OverflowError, EOFError, UnicodeError, tokenize.TokenError) as error:
         if isinstance(error, StippleError):
             raise
-        reason = " ".join(str(error).split())  # numpy's message quotes the header: a line of 6 KB for a deep one
+        message = error.args[0] if isinstance(error, tokenize.TokenError) and error.args else error
+        reason = " ".join(str(message).split())  # numpy's message quotes the header: a line of 6 KB for a deep one
         reason = re.sub(r"<ast\.(\w+) object at 0x[0-9a-fA-F]+>", r"a Python \1 expression", reason)  # not an address
         reason = reason if len(reason) <= 200 else reason[:197] + "..."
         raise StippleError(f"{name}: corrupt or truncated .npy file ({reason})") from None

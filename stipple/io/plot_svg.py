@@ -22,6 +22,9 @@ from .units import UNITS
 
 MAX_SVG_BYTES = 1 << 28
 ROUND_SEGMENTS = 256
+# Groups nested deeper are refused (5000 of them overflowed Python's stack), and so are vertices farther from the
+# origin than this many millimetres (10 km; 1e308 made the lengths infinite and the estimate failed).
+MAX_GROUP_DEPTH, MAX_COORDINATE_MM = 200, 1e7
 MM_PER = {**UNITS, "pc": 25.4 / 6, "": UNITS["px"]}  # SVG lengths: the options' units, picas, bare user units
 SVG = "{http://www.w3.org/2000/svg}"
 INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
@@ -56,9 +59,20 @@ def read_pen_layers(source):
     if _tag(root) != "svg":
         raise StippleError(f"{name}: not an SVG (the root element is <{_tag(root)}>)")
     try:
-        return pen_layers(root)
+        with np.errstate(over="ignore", invalid="ignore"):  # what overflows is refused below, in one line
+            layers = pen_layers(root)
     except (ValueError, IndexError) as error:
         raise StippleError(f"{name}: {error}") from None
+    except OverflowError:
+        raise StippleError(f"{name}: a shape's numbers are too large to draw") from None
+    for layer in layers:
+        for path in layer.paths:
+            if not np.all(np.abs(path) <= MAX_COORDINATE_MM):  # NaN fails too
+                raise StippleError(
+                    f"{name}: layer {layer.name!r} has a vertex that is not a number or lies farther than "
+                    f"{MAX_COORDINATE_MM:g} mm from the origin"
+                )
+    return layers
 
 
 def pen_layers(root):
@@ -96,7 +110,10 @@ def _document_matrix(root):
     view_box = root.get("viewBox")
     if view_box is None:
         return np.diag([MM_PER["px"], MM_PER["px"], 1.0])
-    x0, y0, width, height = (float(value) for value in re.findall(NUMBER, view_box)[:4])
+    values = [float(value) for value in re.findall(NUMBER, view_box)]
+    if len(values) != 4:
+        raise ValueError(f"cannot read the viewBox {view_box!r} (four numbers: x, y, width, height)")
+    x0, y0, width, height = values
     if not (width > 0 and height > 0):
         raise ValueError(f"the viewBox {view_box!r} must have a positive width and height")
     sx = length_mm(root.get("width")) / width if root.get("width") else MM_PER["px"]
@@ -109,8 +126,21 @@ def _transform(text):
     matrix = np.eye(3)
     for name, arguments in re.findall(r"(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)", text or ""):
         values = [float(value) for value in re.findall(NUMBER, arguments)]
+        if len(values) not in TRANSFORM_ARGUMENTS[name]:
+            raise ValueError(f"cannot read the transform {name}({arguments.strip()})")
         matrix = matrix @ _one_transform(name, values)
     return matrix
+
+
+# How many numbers each transform function takes (SVG 1.1, 7.6).
+TRANSFORM_ARGUMENTS = {
+    "matrix": (6,),
+    "translate": (1, 2),
+    "scale": (1, 2),
+    "rotate": (1, 3),
+    "skewX": (1,),
+    "skewY": (1,),
+}
 
 
 def _one_transform(name, values):
@@ -143,20 +173,27 @@ def _apply(matrix, path):
     )
 
 
-def _shapes(element, matrix):
+def _shapes(element, matrix, depth=0):
     """The strokes of ``element`` and everything inside it, in document order, in millimetres."""
     tag = _tag(element)
     if tag in SKIPPED:
         return []
+    if depth > MAX_GROUP_DEPTH:
+        raise ValueError(f"groups are nested more than {MAX_GROUP_DEPTH} deep")
     matrix = matrix @ _transform(element.get("transform"))
     if tag in ("g", "a", "svg", "switch"):
-        return [path for child in element for path in _shapes(child, matrix)]
+        return [path for child in element for path in _shapes(child, matrix, depth + 1)]
     return [_apply(matrix, path) for path in _element_paths(tag, element) if len(path) >= 2]
 
 
 def _number(element, name):
     value = element.get(name)
-    return 0.0 if value is None else float(re.findall(NUMBER, value)[0])
+    if value is None:
+        return 0.0
+    numbers = re.findall(NUMBER, value)
+    if not numbers:
+        raise ValueError(f"cannot read <{_tag(element)} {name}={value!r}> (a number)")
+    return float(numbers[0])
 
 
 def _element_paths(tag, element):

@@ -47,4 +47,7 @@ def parse_colour(text, name="color"):
         rgb = ImageColor.getrgb(str(text).strip())
     except ValueError:
         raise StippleError(f"{name} must be a colour such as #1a2b3c, #fff or white, not {text!r}") from None
+    # Pillow passes rgb(999,2,3) and hsl(720,200%,50%) through out of range; an SVG then got fill="#3e70203".
+    if not all(0 <= channel <= 255 for channel in rgb):
+        raise StippleError(f"{name} must be a colour with channels from 0 to 255, not {text!r} ({rgb})")
     return tuple(channel / 255 for channel in rgb[:3])

@@ -112,10 +112,13 @@ def open_frames(source, *, start=0, stop=None, step=1):
 
 
 def _frame_files(source):
-    """Frame images of a folder or a glob in natural order; None when ``source`` is a file."""
+    """Frame images of a folder or a glob in natural order; None when ``source`` is a file. A folder's hidden files
+    are left out, as the glob leaves them out (a macOS ``._frame1.png`` was read as a frame and stopped the run)."""
     if os.path.isdir(source):
-        names = [os.path.join(source, name) for name in os.listdir(source)]
-        files = [name for name in names if os.path.splitext(name)[1].lower() in FRAME_EXTENSIONS]
+        names = [os.path.join(source, name) for name in os.listdir(source) if not name.startswith(".")]
+        files = [
+            name for name in names if os.path.splitext(name)[1].lower() in FRAME_EXTENSIONS and os.path.isfile(name)
+        ]
     elif any(char in source for char in "*?[") and not os.path.exists(source):
         files = [name for name in glob.glob(source) if os.path.isfile(name)]
     else:

@@ -14,6 +14,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..errors import StippleError
+from ..io.png import float_picture_layers
 from ..nearfield import check_pair_memory
 from ..tone import fit_inside, tone_radii_layers
 from ..tone.radii import canvas_pixels
@@ -350,6 +351,15 @@ def sphere_canvas(projection):
     if projection == "equirect":
         return (ORTHO_SIZE * 2, ORTHO_SIZE)
     return (ORTHO_SIZE, ORTHO_SIZE)
+
+
+def sphere_png_layers(projection, colours):
+    """Bytes a supersampled pixel of a sphere PNG takes while it is drawn (``check_png_outputs``' ``layers``): the
+    globe's outline is drawn through float coverage, in one channel where all ``colours`` (RGB) are grays; the map
+    straight onto an 8-bit canvas."""
+    if projection != "ortho":
+        return 2
+    return float_picture_layers(1 if all(len(set(colour)) == 1 for colour in colours) else 3)
 
 
 GLOBE = 0.98  # the globe's radius over half the canvas
