@@ -205,18 +205,20 @@ def torus_problem(
         bandwidth = even_at_least_2(correction_bandwidth * check_bandwidth_factor(bandwidth_factor))
     bandwidth = check_bandwidth(bandwidth)
     threads = default_threads() if threads is None else check_threads(threads)
-    point_bytes = POINT_BYTES + THREAD_POINT_BYTES * threads
-    check_memory(GRIDS * 16 * 1.6 * (bandwidth + 1) ** 2 + point_bytes * n_points, f"M={n_points}, N={bandwidth}")
     if backend not in BACKENDS:
         raise StippleError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    epsilon = check_epsilon(epsilon)
-    derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon)
-    scale = torus_scale(weights.shape)
     shape = tuple(n + 1 for n in axis_bandwidths(bandwidth, weights.shape))
     # The GPU's transforms keep the measured path: they were never run from a second thread (no GPU to check on).
     pair_threads = pair_share(threads) if near_field and backend != "cufinufft" else 0
-    nufft = make_nufft(backend, shape, derivative_epsilon, threads - pair_threads)
-    fourier = TorusFourier(nufft, analysis_epsilon=epsilon)
+    transform_threads = threads - pair_threads
+    derivative_threads = shared_derivative_threads(transform_threads, pair_threads, shape)
+    point_bytes = POINT_BYTES + THREAD_POINT_BYTES * (threads + 2 * (derivative_threads > transform_threads))
+    check_memory(GRIDS * 16 * 1.6 * (bandwidth + 1) ** 2 + point_bytes * n_points, f"M={n_points}, N={bandwidth}")
+    epsilon = check_epsilon(epsilon)
+    derivative_epsilon = derivative_accuracy(epsilon, derivative_epsilon)
+    scale = torus_scale(weights.shape)
+    nufft = make_nufft(backend, shape, derivative_epsilon, derivative_threads)
+    fourier = TorusFourier(nufft, analysis_epsilon=epsilon, analysis_threads=transform_threads)
     objective, discrepancy = torus_objective(weights, n_points, bandwidth, fourier, hessian, near_field, pair_threads)
     manifold = ScaledTorus(scale, stiffness_field(weights, n_points)) if precondition else Torus(scale)
     # The same image with other counts or bandwidths: the correction's coarse problems and the start's levels.
@@ -259,13 +261,30 @@ def torus_problem(
 
 # A run's memory (``torus_problem``'s check): GRIDS complex mode grids, oversampled, and POINT_BYTES a point, with
 # THREAD_POINT_BYTES more for each thread (each residue class of the type-1 transforms keeps the points' phases
-# and its plan's copy of them). Whole default commands with 2 threads peaked at 2.50 GiB for 10^6 points at
-# N = 2620 (estimated 2.41), 2.19 GB for a small dark spot on a white page, 10^4 points at N = 3120 (2.25); with
+# and its plan's copy of them; two more where the derivatives share the pairs' thread). Whole default commands
+# with 2 threads peaked at 2.50 GiB for 10^6 points at N = 2620 (estimated 2.41; 2.57 since the sharing, estimated
+# 2.56), 2.19 GB for a small dark spot on a white page, 10^4 points at N = 3120 (2.25); with
 # 16 threads 10^6 points peaked at 3.45 GiB (estimated 3.46; a 16-core machine), and M = 200000 at 0.72 GiB
 # against 0.60 with 2 (`--threads 16` on 2 cores).
 # Twelve grids and 320 bytes a point estimated 20 million points on a 48 x 32 image at 15.4 GiB, which passed on a
 # machine with 22.8 GiB available, and the kernel's OOM killer ended the run at 23.5 GB; now 25.7 GiB, refused.
 GRIDS, POINT_BYTES, THREAD_POINT_BYTES = 9, 850, 80
+
+
+# Grids of more rows than this give the derivatives' transforms the pairs' thread too, where each has one.
+SHARED_DERIVATIVE_ROWS = 2000
+
+
+def shared_derivative_threads(transform_threads, pair_threads, shape):
+    """Threads of the derivatives' transforms (the gradient's type-2 and the Hessian form's type-1): the
+    transforms' share, or, with one thread each for the transforms and the pairs, both on a grid of more than
+    ``SHARED_DERIVATIVE_ROWS`` rows. The pairs' gradient and form are a small part of those phases, so their thread
+    idles there (M = 10^6, N = 2620: the whole default command 0.95x the time, 104 against 109 s, 140 MB more for
+    the residue classes' copies of the points; M = 200000 and the portrait gained nothing or lost,
+    docs/performance.md, nineteenth round). The residual's transform keeps one thread beside the pairs' search."""
+    if transform_threads == 1 and pair_threads == 1 and shape[0] > SHARED_DERIVATIVE_ROWS:
+        return 2
+    return transform_threads
 
 
 def pair_share(threads):

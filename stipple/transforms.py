@@ -43,20 +43,21 @@ class TorusFourier:
 
     ``nufft`` (the whole mode grid) makes the derivatives' transforms (``gradient_synthesis``, ``gradient_analysis``,
     ``jacobian_gram``, ``hessian_synthesis``) at its own accuracy; ``analysis``, whose sums the residual subtracts
-    from the target, has its own plans at ``analysis_epsilon`` (default: the same). A derivative only steers CG
-    and sizes its step, so it may be coarser than the residual (``stipple.torus.DERIVATIVE_EPSILON``).
+    from the target, has its own plans at ``analysis_epsilon`` (default: the same) on ``analysis_threads`` (default:
+    ``nufft``'s), which also do the mode-grid arithmetic. A derivative only steers CG and sizes its step, so it may
+    be coarser than the residual (``stipple.torus.DERIVATIVE_EPSILON``).
     """
 
-    def __init__(self, nufft, analysis_epsilon=None):
+    def __init__(self, nufft, analysis_epsilon=None, analysis_threads=None):
         self.nufft = nufft
         # Mode-grid arithmetic runs on the transforms' threads, in row blocks (``stipple.parallel``).
-        self.threads = nufft.threads
+        self.threads = nufft.threads if analysis_threads is None else analysis_threads
         self.epsilon = nufft.epsilon if analysis_epsilon is None else analysis_epsilon
         # ``analysis`` sums real values, so c_-n = conj(c_n): it transforms the rows n1 >= 0 only, on an odd grid
         # of at least N1/2 + 1 rows whose centre row is n1 = half_offset, and mirrors them.
         half_rows = nufft.shape[0] // 2 + 1
         half_rows += 1 - half_rows % 2
-        self.half_nufft = make_nufft(nufft.name, (half_rows, nufft.shape[1]), self.epsilon, nufft.threads)
+        self.half_nufft = make_nufft(nufft.name, (half_rows, nufft.shape[1]), self.epsilon, self.threads)
         self._half_offset = half_rows // 2
         self._half_phase = None
         self.modes = torus_modes(nufft.shape)

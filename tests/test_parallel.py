@@ -103,3 +103,30 @@ def test_transforms_and_pairs_at_once_give_the_bits_of_one_after_the_other():
         results.append(evaluations + objective.hessian_vectors(fields))
     for mine, theirs in zip(*results, strict=True):
         np.testing.assert_array_equal(mine, theirs)
+
+
+def test_a_large_grid_gives_the_derivatives_the_pairs_thread_and_repeats_its_bits(monkeypatch):
+    """Above ``SHARED_DERIVATIVE_ROWS`` rows the gradient's and the Hessian form's transforms take both threads
+    (the residual keeps one beside the pairs): the energy has the bits of one thread, the derivatives agree with
+    them to rounding, and two evaluations give the same bits."""
+    import stipple.torus
+
+    monkeypatch.setattr(stipple.torus, "SHARED_DERIVATIVE_ROWS", 64)
+    single, points = threaded_problem(1)
+    shared, _ = threaded_problem(2)
+    fourier = shared.objective.terms[0].fourier
+    assert fourier.nufft.shape[0] > 64 and fourier.nufft.threads == 2
+    assert fourier.half_nufft.threads == 1 and fourier.threads == 1
+    fields = [np.random.default_rng(2).standard_normal(points.shape), points]
+    results = []
+    for problem in (single, shared, shared):
+        objective = problem.objective
+        objective.set_points(points)
+        evaluations = [objective.energy(), objective.gradient(), objective.hessian_gram(fields)]
+        results.append(evaluations + objective.hessian_vectors(fields))
+    one, two, again = results
+    assert two[0] == one[0]
+    for mine, theirs in zip(two[1:], one[1:], strict=True):
+        assert np.abs(mine - theirs).max() <= 1e-10 * np.abs(theirs).max()
+    for mine, theirs in zip(again, two, strict=True):
+        np.testing.assert_array_equal(mine, theirs)
