@@ -162,6 +162,13 @@ def _with_mass(layers):
     return layers
 
 
+def palette_inks(separation):
+    """The names of ``separation``'s inks in its order (``separate``'s, before inks without mass are left out)."""
+    if not isinstance(separation, str):
+        return [name for name, _ in separation]
+    return {"gray": ["black"], "cmy": ["cyan", "magenta", "yellow"]}.get(separation, list(INK_COLOURS)[:4])
+
+
 def check_palette_extras(palette, black, union_weight=1.0):
     """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both),
     ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component), and

@@ -51,6 +51,25 @@ def test_colour_writes_one_layer_per_ink_with_counts_by_mass(colour_image, tmp_p
     assert right[..., 2].mean() > right[..., 0].mean() + 20  # teal on the right
 
 
+@pytest.mark.parametrize("style", [[], ["--dot-style", "filled", "--pen-width", "0.2mm"]])
+def test_an_ink_without_dots_leaves_its_layer_number_free_and_is_named(tmp_path, style):
+    """A held-out review: on a photo whose cyan got no dots, magenta became layer 1 of the SVG (and of vpype), so
+    every pen after it moved a slot, and nothing said cyan was empty. A red and white image has no cyan and no
+    black: magenta and yellow keep layers 2 and 3."""
+    pixels = np.full((12, 16, 3), 255, dtype=np.uint8)
+    pixels[:, :8] = (255, 0, 0)
+    Image.fromarray(pixels).save(tmp_path / "red.png")
+    args = ["colour", tmp_path / "red.png", "-M", 60, "--iterations", 2, *style, "-o", tmp_path / "dots.svg"]
+    result = run(args)
+    assert result.exit_code == 0, result.output
+    assert "stipple: note: no dots for cyan, black" in result.stderr, result.stderr
+    svg = (tmp_path / "dots.svg").read_text()
+    labels = svg.split('inkscape:label="')[1:]
+    assert [label.split('"')[0] for label in labels] == ["2-magenta", "3-yellow"]
+    assert 'id="layer2"' in svg and 'id="layer3"' in svg and 'id="layer1"' not in svg
+    assert "no dots" not in run([*args[:-2], "-q", "-o", tmp_path / "quiet.svg"]).stderr
+
+
 def test_colour_refuses_gray_only_options(colour_image):
     """``stipple colour`` does not offer them; ``stipple torus --palette``, which does, refuses them."""
     result = run(["colour", colour_image[0], "-M", 50, "--invert", "-q"])

@@ -108,9 +108,17 @@ def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers)
 
         outputs, stopped_by = supervised(options, launch)
         report_run(outputs.result, options)
+        report_notes(getattr(outputs, "notes", ()), options)
         report_travel(outputs, options, recipe)
         write_outputs(options["outputs"], outputs.files, options["quiet"])
     finish(outputs.result, stopped_by, options, started)
+
+
+def report_notes(notes, options):
+    """The pipeline's notes on its outputs, one line each on stderr (unless ``--quiet``)."""
+    if not options["quiet"]:
+        for line in notes:
+            click.echo(f"stipple: note: {line}", err=True)
 
 
 def report_travel(outputs, options, recipe):

@@ -37,14 +37,17 @@ def path_data(path):
     return "M" + " L".join(f"{z.real:.4f},{z.imag:.4f}" for z in path)
 
 
-def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=None, notes=(), blend="over"):
+def svg_document(
+    layers, size, physical_width, *, background=WHITE, pen_width=None, notes=(), blend="over", numbers=None
+):
     """SVG of ``Dots`` layers, one Inkscape layer each, on a ``size = (width, height)`` user-unit canvas.
 
     Round dots are circles, foreshortened ones ellipses, pen-drawn ones stroked paths ``pen_width`` wide.
     Filled dots also carry a stroke of their colour (width 0), so that ``vpype read`` keeps each layer's pen
     colour. ``notes`` become comments and the ``<desc>``; a background other than white is a filled rectangle.
     ``blend`` "multiply" (inks printed over each other, as the PNG draws them) gives every layer the CSS
-    ``mix-blend-mode: multiply`` (browsers, Inkscape); "over" paints each layer over the ones before.
+    ``mix-blend-mode: multiply`` (browsers, Inkscape); "over" paints each layer over the ones before. ``numbers``
+    are the layers' numbers (ids ``layer<n>``, labels ``<n>-<name>``; default 1, 2, ...).
     """
     width, height = size
     value, unit = physical_width
@@ -57,7 +60,7 @@ def svg_document(layers, size, physical_width, *, background=WHITE, pen_width=No
     if notes:
         parts.append(f"<desc>{'; '.join(notes)}</desc>")
     parts.extend(_background(background, size))
-    for index, dots in enumerate(layers, start=1):
+    for index, dots in zip(numbers or range(1, len(layers) + 1), layers, strict=True):
         parts.append(_svg_layer(index, dots, pen_width, blend))
     parts.append("</svg>\n")
     return "\n".join(parts).encode()

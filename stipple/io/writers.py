@@ -18,6 +18,7 @@ def drawing_bytes(drawing, fmt):
             pen_width=drawing.pen_width,
             notes=drawing.notes,
             blend=drawing.blend,
+            numbers=drawing.layer_numbers,
         )
     picture = render_picture(
         drawing.layers,

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import INK_COLOURS, check_layer_names, colour_problem, print_target, separate
+from ..colour import INK_COLOURS, check_layer_names, colour_problem, palette_inks, print_target, separate
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_outputs
@@ -96,8 +96,23 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
     if recipe.order:
         placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
     tone = tone_settings([layer.density for layer in layers], rgb, settings["separation"])
-    files = layered_files(placed, shape, formats, recipe.draw, **tone)
-    return ImageOutputs(files, result, travel)
+    inks = palette_inks(settings["separation"])
+    numbers = [inks.index(name) + 1 for name, _, _ in placed]
+    files = layered_files(placed, shape, formats, recipe.draw, numbers, **tone)
+    return ImageOutputs(files, result, travel, notes=missing_inks(inks, [name for name, _, _ in placed]))
+
+
+def missing_inks(inks, placed):
+    """A line naming the palette's ``inks`` that got no dots (none where every ink is ``placed``): their SVG
+    layers' numbers are left free, so that every pen keeps its slot (a held-out review: an empty cyan made magenta
+    layer 1)."""
+    missing = [name for name in inks if name not in placed]
+    if not missing:
+        return []
+    return [
+        f"no dots for {', '.join(missing)} (too little of the image's ink for one dot); the SVG's layers keep "
+        "their palette numbers"
+    ]
 
 
 def ordered_layers(placed, shape, width):

@@ -49,13 +49,15 @@ class ImageOutputs:
     """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
     optimiser's ``HalftoneResult``; ``travel`` the pen-up travel
     before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it);
-    ``passes`` the dots per pass of ``--order progressive``; ``count`` the ``PenCount`` of ``-M auto``."""
+    ``passes`` the dots per pass of ``--order progressive``; ``count`` the ``PenCount`` of ``-M auto``; ``notes``
+    lines for the user about the outputs (an ink that got no dots)."""
 
     files: dict
     result: object
     travel: list = field(default_factory=list)
     passes: list = field(default_factory=list)
     count: object = None
+    notes: list = field(default_factory=list)
 
 
 def stipple_image(image, formats, recipe, *, session=None, inspect=None, announce=None, chosen=None):

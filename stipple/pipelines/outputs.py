@@ -1,6 +1,8 @@
 """A run's outputs: every format's bytes, points as CSV or GeoJSON and pictures from one ``Drawing``, made once
 and serialised as SVG and PNG alike."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..errors import StippleError
@@ -59,10 +61,10 @@ def torus_files(points, shape, formats, settings, darkness=None):
     )
 
 
-def layered_files(layers, shape, formats, settings, **tone):
+def layered_files(layers, shape, formats, settings, numbers=None, **tone):
     """Layered torus dots, ``layers`` of ``(name, colour, points)``: CSV ``x,y,layer`` in pixels, SVG one Inkscape
-    layer per ink, PNG the inks printed on the paper (``stipple.render.flat.layered_drawing``; ``tone``: ``ink``,
-    ``coverages``, ``target``)."""
+    layer per ink (numbered ``numbers``, default 1, 2, ...), PNG the inks printed on the paper
+    (``stipple.render.flat.layered_drawing``; ``tone``: ``ink``, ``coverages``, ``target``)."""
 
     def points_bytes(fmt):
         if fmt in (".geojson", ".json"):
@@ -71,7 +73,10 @@ def layered_files(layers, shape, formats, settings, **tone):
         names = [name for name, _, points in layers for _ in range(len(points))]
         return layered_csv_bytes(pixels, names)
 
-    return output_files(formats, points_bytes, lambda: layered_drawing(layers, shape, **settings, **tone))
+    def drawing():
+        return replace(layered_drawing(layers, shape, **settings, **tone), layer_numbers=numbers)
+
+    return output_files(formats, points_bytes, drawing)
 
 
 def line_files(points, shape, formats, **settings):

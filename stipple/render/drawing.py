@@ -15,7 +15,8 @@ class Drawing:
     stroked ``pen_width`` user units wide; or one closed ``line`` (vertices in user units) stroked ``stroke``
     wide in ``line_colour`` on ``background``. ``notes`` describe it (SVG comments), ``warnings`` are the notes a
     user must also see (dots left out); ``outline``, a box ``(left, top, right, bottom)``, is the globe's disc,
-    shaded under the first layer in the PNG.
+    shaded under the first layer in the PNG. ``layer_numbers`` number the SVG's layers (default 1, 2, ...): an
+    ink's place in its palette, so that a pen keeps its slot where an ink got no dots.
     """
 
     size: tuple
@@ -31,6 +32,7 @@ class Drawing:
     line: object = None
     stroke: float = 1.0
     line_colour: tuple = BLACK
+    layer_numbers: tuple | None = None
 
     @property
     def count(self):

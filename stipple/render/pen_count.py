@@ -202,7 +202,8 @@ def clipped_density(darkness, allowed, cell_areas=None):
     return np.minimum(darkness, low)
 
 
-# A point pen's dots with a given -M that carry less than this share of the image's ink get a note.
+# A point pen's dots with a given -M that carry less than this share of the image's ink get a note; pen dots of any
+# style more than -M auto's count get one too.
 LIGHT_SHARE = 0.8
 
 
@@ -232,29 +233,49 @@ def given_count_notes(darkness, n_points, draw, inverted=False):
     lines = []
     reachable = reachable_tone(style if style in PEN_STYLES else "filled")
     darkest = float(np.percentile(darkness, DARKEST_PERCENTILE))
-    drawn = (INVERTED_WORDS if inverted else TONE_WORDS)[1]
     why, advice = "the plotter style's dots never touch", "; the default tone style with discs draws them"
     line = out_of_reach(reachable, darkest, inverted, why, advice)
     if line:
         lines.append(line)
-    if style == "point":
-        paper_width, pen_width = paper_and_pen(draw)
-        paper = paper_area(paper_width, darkness.shape)
-        area, _ = pen_dot(style, pen_width)
-        packing = packing_count(style, pen_width, paper)
-        carried = carried_count(darkness, reachable_tone(style, pen_width), paper, area, packing)
-        if n_points < LIGHT_SHARE * carried:
-            lines.append(
-                f"{n_points} point dots of a {pen_width:g} mm pen ink {n_points * area / paper:.0%} of the paper for "
-                f"the image's {darkness.mean():.0%}: the drawing comes out {drawn} (-M auto counts the dots that "
-                f"carry its ink, {carried})"
-            )
-        if n_points > packing:
-            lines.append(
-                f"{n_points} point dots of a {pen_width:g} mm pen are more than the {packing} that fit on this paper "
-                "without touching: the drawing leaves out those that would touch (give fewer, or -M auto)"
-            )
+    if style in PEN_STYLES:
+        lines += pen_count_notes(darkness, n_points, draw, inverted)
     return lines
+
+
+def pen_count_notes(darkness, n_points, draw, inverted=False):
+    """``given_count_notes``' lines on the count of pen dots: too few point dots for the image's ink, more than
+    fit without touching, and, for every style, more than ``-M auto``'s count, which carries the ink: a point dot
+    inks a fixed area, so more of them draw the light tones darker (-M 4500 of a 0.5 mm pen, against -M auto's
+    4081, drew a held-out portrait's 0.72 luminance as 0.64); filled and circle dots packed closer are placed more
+    evenly and drawn smaller (-M 8000 of a 1 mm pen, auto's 6744, drew the portrait a flat light gray: luminance
+    RMSE 0.27 at 4 px, against 0.12)."""
+    style = draw["dot_style"]
+    paper_width, pen_width = paper_and_pen(draw)
+    paper = paper_area(paper_width, darkness.shape)
+    area, _ = pen_dot(style, pen_width)
+    packing = packing_count(style, pen_width, paper)
+    carried = carried_count(darkness, reachable_tone(style, pen_width), paper, area, packing)
+    light, dark = (INVERTED_WORDS if inverted else TONE_WORDS)[1::-1]
+    dots = f"{n_points} {style} dots of a {pen_width:g} mm pen"
+    if style == "point" and n_points < LIGHT_SHARE * carried:
+        return [
+            f"{dots} ink {n_points * area / paper:.0%} of the paper for the image's {darkness.mean():.0%}: the drawing "
+            f"comes out {light} (-M auto counts the dots that carry its ink, {carried})"
+        ]
+    if n_points <= carried:
+        return []
+    if style != "point":
+        return [
+            f"{dots} are more than the {carried} that carry the image's ink without touching (-M auto): packed "
+            f"closer, they are placed more evenly and drawn smaller, and the picture comes out flatter and {light}"
+        ]
+    if n_points <= packing:
+        why = f"its {light} tones come out {dark}"
+        return [f"{dots} are more than the {carried} that carry the image's ink (-M auto): {why}"]
+    return [
+        f"{dots} are more than the {packing} that fit on this paper without touching: the drawing leaves out those "
+        "that would touch (give fewer, or -M auto)"
+    ]
 
 
 def ink_darkness(image, separation="gray", black=1.0):
