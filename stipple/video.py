@@ -39,12 +39,9 @@ from .torus import DEFAULT_EPSILON, default_bandwidth, periodic_blur, torus_prob
 from .video_inks import Inks
 from .video_keeper import FrameKeeper, checkpoint_settings
 
-# Warm frames: 20 CG iterations reached E_N within 1-2 % of a cold run of each frame on the test clips, where 10
-# left 4-12 % and the dots' moves in still regions were the same. Since 2026-11-27 every frame is solved in the
-# density-scaled metric, and FRAME_ITERATIONS before the deformation (WARM_DEFORMATION's 4 iterations, then
-# WARM_POLISH) leave the bench's clips, and a light page with small dark blobs, within 2.2 dB of the median of
-# three stills at sigma 4 px in 0.27-0.29 of a cold frame's time; 8 before and 8 in the deformation left the light
-# page 4.6 dB below (docs/video.md).
+# Warm frames, in the density-scaled metric: FRAME_ITERATIONS before the deformation (WARM_DEFORMATION's 4, then
+# WARM_POLISH) leave the bench's clips and a light page with small dark blobs within 2.2 dB of the median of three
+# stills at sigma 4 px in 0.27-0.29 of a cold frame's time; 8 and 8 left the page 4.6 dB below (docs/video.md).
 FRAME_ITERATIONS = 12
 # The deformation shifts a moving object's dots as a whole, and where they meet the freed dots it leaves gaps: a
 # dark disc moving down 5 px a frame came out with white holes (its lightest pixel 0.65-0.80 for 0.05, blurred at
@@ -57,11 +54,9 @@ CHANGE = 0.02
 FREE_MARGIN = 3.0
 # After the pinned phase every warm frame whose darkness changed is corrected over all dots, in two steps. First
 # WARM_DEFORMATION = (factor, iterations): CG moves every dot by one smooth displacement field of bandwidth N / factor
-# to lower the frame's whole objective (``stipple.deformation``). It fixes the middle frequencies that the pinned
-# iterations leave (on a fade, 3-5 times a cold run's error at 12-24 cycles per image, where a blur of 4 px still
-# sees them) without stirring the high ones: the plain E_N at N / 3 of the previous correction could not, and at
-# N / 4 it stirred the light parts of a gradient, where the dots are sparser than its modes (docs/video.md). In the
-# density-scaled metric the pinned iterations do more of its work: 4 of its iterations instead of 8.
+# to lower the frame's whole objective (``stipple.deformation``): the middle frequencies that the pinned iterations
+# leave (a fade: 3-5 times a cold run's error at 12-24 cycles per image), without stirring the high ones as the
+# plain E_N at N / 3 or N / 4 did (docs/video.md). In the density-scaled metric 4 of its iterations instead of 8.
 WARM_DEFORMATION = (4, 4)
 # A colour video's joint problem stays in the flat metric (``Inks.problem``), where 8 were measured.
 COLOUR_DEFORMATION = (4, 8)
@@ -70,6 +65,9 @@ COLOUR_DEFORMATION = (4, 8)
 # a moving disc, E_N at N = 128 2.5 x a cold run's); the deformation without this level left the photo clips
 # 8-10 dB below a cold run at sigma 4 px; a level at N / 12 after it changed nothing.
 WARM_LEVELS = ((5, 6), (6, 10))
+# Colour frames skip them: each ink's dots followed their own term, and inks slid onto each other (45-130 dots in
+# coincident pairs a frame); the deformation moves all dots by one field (docs/video.md, "Colour video").
+COLOUR_WARM_LEVELS = ()
 # A scene cut: the darkness, blurred at one dot spacing, changed by more than CUT on average over the frame (a cut
 # between two photos: 0.15; a pan, a fade, a moving object: at most 0.012 per frame). The freed dots then make up
 # to ``iterations`` CG iterations under the cold run's stopping rule, not ``frame_iterations``.
@@ -369,8 +367,8 @@ def _cut_tol(problem, pinned, previous, settings):
 
 def _correct(problem, result, settings, stop, polish=None):
     """A warm frame's correction over all dots: the smooth deformation (``WARM_DEFORMATION``), then ``polish``
-    (the freed dots' ``WARM_POLISH`` iterations, if given), then the plain ``E_N`` levels (``WARM_LEVELS``); the
-    result counts their iterations."""
+    (the freed dots' ``WARM_POLISH`` iterations, if given), then the plain ``E_N`` levels (``WARM_LEVELS``; none
+    for colour, ``COLOUR_WARM_LEVELS``); the result counts their iterations."""
     factor, iterations = WARM_DEFORMATION if settings.palette is None else COLOUR_DEFORMATION
     shown = None if stop is None else (lambda _: stop(result.state))
     points, deformed = deform(
@@ -390,7 +388,10 @@ def _correct(problem, result, settings, stop, polish=None):
         if polished.status == "stopped":
             return replace(result, status="stopped")
         result = replace(result, points=polished.points, iterations=result.iterations + polished.iterations)
-    result = correct_low_frequencies(problem, result, settings.time_limit, stop, levels=WARM_LEVELS)
+    levels = WARM_LEVELS if settings.palette is None else COLOUR_WARM_LEVELS
+    if not levels:
+        return result
+    result = correct_low_frequencies(problem, result, settings.time_limit, stop, levels=levels)
     if any(level.status == "stopped" for level in result.corrections):
         return replace(result, status="stopped")
     return replace(result, iterations=result.iterations + sum(level.iterations for level in result.corrections))
