@@ -15,7 +15,7 @@ import numpy as np
 import vpype as vp
 import vpype_cli
 
-from .colour import check_palette_extras, halftone_colour, parse_palette
+from .colour import check_palette_extras, halftone_colour, palette_inks, parse_palette
 from .errors import StippleError
 from .halftone import check_count
 from .line import LINE_ITERATIONS
@@ -122,8 +122,9 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
             click.echo(f"stipple: note: {left_out_note(left_out, f'{n_points} dots')}", err=True)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
+    inks = palette_inks(parse_palette(options["separation"]))
     for name, colour, paths in drawn:
-        layer_id = document.free_id()
+        layer_id = plugin_layer_id(document, inks.index(name) + 1)
         document.add(vp.LineCollection(paths), layer_id)
         layer = document.layers[layer_id]
         layer.set_property(vp.METADATA_FIELD_NAME, name)
@@ -134,6 +135,14 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
 
 
 stipple.help_group = "Plugins"
+
+
+def plugin_layer_id(document, number):
+    """The layer id of the palette's ink ``number`` (1, 2, ...): that number where the document has no such layer
+    yet, so that an ink keeps its pen's slot where an earlier ink got no dots (as ``stipple colour``'s SVG), else
+    the document's next free id."""
+    return number if number not in document.layers else document.free_id()
+
 
 CSS_PIXEL_MM = 25.4 / 96
 

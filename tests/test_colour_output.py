@@ -120,6 +120,23 @@ def test_vpype_plugin_adds_one_named_coloured_layer_per_ink(colour_image):
     assert np.all((centres.real >= 0) & (centres.real <= width) & (centres.imag >= 0) & (centres.imag <= width * 0.75))
 
 
+def test_vpype_plugin_keeps_an_inks_layer_number_where_an_earlier_ink_has_no_dots(tmp_path):
+    """A red and white image has no cyan: magenta is layer 2 and yellow layer 3, as in stipple colour's SVG (the
+    plugin made them 1 and 2, and every pen after the empty ink moved a slot)."""
+    vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
+    import vpype_cli
+
+    pixels = np.full((12, 16, 3), 255, dtype=np.uint8)
+    pixels[:, :8] = (255, 0, 0)
+    Image.fromarray(pixels).save(tmp_path / "red.png")
+    document = vpype_cli.execute(
+        f"stipple -M 60 --separation cmyk --iterations 2 --dot-style filled --width 80mm --pen-width 0.3mm "
+        f"{tmp_path / 'red.png'}"
+    )
+    names = {number: layer.property(vpype.METADATA_FIELD_NAME) for number, layer in document.layers.items()}
+    assert names == {2: "magenta", 3: "yellow"}
+
+
 def composite_svg(svg, shape, per_pixel=8):
     """The SVG's circles as a viewer composites them on white paper, sampled ``per_pixel``² times a user unit:
     each layer's union of discs, laid over what is below, or multiplied with it where the layer's style says
