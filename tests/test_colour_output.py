@@ -51,7 +51,7 @@ def test_colour_writes_one_layer_per_ink_with_counts_by_mass(colour_image, tmp_p
     assert right[..., 2].mean() > right[..., 0].mean() + 20  # teal on the right
 
 
-@pytest.mark.parametrize("style", [[], ["--dot-style", "filled", "--pen-width", "0.2mm"]])
+@pytest.mark.parametrize("style", [[], ["--dot-style", "filled", "--pen-width", "0.2mm", "--order"]])
 def test_an_ink_without_dots_leaves_its_layer_number_free_and_is_named(tmp_path, style):
     """A held-out review: on a photo whose cyan got no dots, magenta became layer 1 of the SVG (and of vpype), so
     every pen after it moved a slot, and nothing said cyan was empty. A red and white image has no cyan and no
@@ -63,6 +63,8 @@ def test_an_ink_without_dots_leaves_its_layer_number_free_and_is_named(tmp_path,
     result = run(args)
     assert result.exit_code == 0, result.output
     assert "stipple: note: no dots for cyan, black" in result.stderr, result.stderr
+    if "--order" in style:  # each ink's pen-up travel says whose it is
+        assert "pen-up travel (magenta)" in result.stderr and "pen-up travel (yellow)" in result.stderr
     svg = (tmp_path / "dots.svg").read_text()
     labels = svg.split('inkscape:label="')[1:]
     assert [label.split('"')[0] for label in labels] == ["2-magenta", "3-yellow"]

@@ -128,5 +128,7 @@ def report_travel(outputs, options, recipe):
         return
     passes = getattr(outputs, "passes", None)
     suffix = f" in passes of {', '.join(str(count) for count in passes)} dots" if passes else ""
-    for before, after in outputs.travel:
-        click.echo(f"stipple: pen-up travel {before:.4g} -> {after:.4g} {recipe.draw['width'][1]}{suffix}", err=True)
+    unit = recipe.draw["width"][1]
+    for before, after, ink in outputs.travel:
+        layer = f" ({ink})" if ink else ""  # a colour run's three or four lines said which was which
+        click.echo(f"stipple: pen-up travel{layer} {before:.4g} -> {after:.4g} {unit}{suffix}", err=True)

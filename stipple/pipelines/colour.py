@@ -117,12 +117,12 @@ def missing_inks(inks, placed):
 
 def ordered_layers(placed, shape, width):
     """Each layer's points along a short pen path of its own (layers of fewer than 2 dots as they are), and the
-    pen-up travel before and after of each layer ordered."""
+    pen-up travel before and after of each layer ordered, with its name."""
     ordered, travel = [], []
     for name, colour, points in placed:
         if len(points) >= 2:
             points, before, after = pen_order(points, physical_centres(points, shape, width))
-            travel.append((before, after))
+            travel.append((before, after, name))
         ordered.append((name, colour, points))
     return ordered, travel
 

@@ -47,8 +47,8 @@ class TorusRecipe:
 @dataclass
 class ImageOutputs:
     """One image's outputs: ``files`` maps a format (".csv", ".png", ".svg") to its bytes; ``result`` is the
-    optimiser's ``HalftoneResult``; ``travel`` the pen-up travel
-    before and after ``--order``, in the unit of the drawing's width, of each layer ordered (none without it);
+    optimiser's ``HalftoneResult``; ``travel`` the pen-up travel ``(before, after, ink)`` of ``--order``, in the
+    unit of the drawing's width, of each layer ordered (none without it; ``ink`` None for one ink);
     ``passes`` the dots per pass of ``--order progressive``; ``count`` the ``PenCount`` of ``-M auto``; ``notes``
     lines for the user about the outputs (an ink that got no dots)."""
 

@@ -79,16 +79,16 @@ def sphere_pen_density(density, n_points, draw, projection):
 
 def ordered_points(points, problem, shape, recipe):
     """``(points, travel, passes)``: ``points`` in plotting order (as they are without ``recipe.order``), the
-    pen-up travel before and after in the unit of the drawing's width, and the dots per pass (progressive)."""
+    pen-up travel ``(before, after, None)`` in the unit of the drawing's width, and the dots per pass (progressive)."""
     kind = order_kind(recipe.order)
     if kind is None:
         return points, [], []
     centres = physical_centres(points, shape, recipe.draw.get("width", (200.0, "mm")))
     if kind == "path":
         points, before, after = pen_order(points, centres)
-        return points, [(before, after)], []
+        return points, [(before, after, None)], []
     from ..progressive import progressive_order
 
     counts = [int(count) for count in np.diff([0] + [part.stop for part in problem.slices])]
     order, before, after = progressive_order(centres, counts)
-    return points[order], [(before, after)], counts
+    return points[order], [(before, after, None)], counts
