@@ -119,3 +119,21 @@ def test_a_globe_png_counts_its_float_planes_before_the_run(tmp_path, monkeypatc
     args = ["sphere", "--uniform", "-M", 30, "--iterations", 2, "-q", "--png-width", 1024]
     refused([*args, "-o", "g.png"], tmp_path, "of memory to draw")
     assert invoke([*args, "--projection", "equirect", "--png-width", 512, "-o", "m.png"], tmp_path).exit_code == 0
+
+
+def test_a_run_whose_messages_nobody_reads_still_writes_its_outputs(tmp_path):
+    """``stipple torus ... 2>&1 | head -1``: the run stopped at its next message (BrokenPipeError), exit 1, no
+    output written, where the outputs are its result; now the messages go quiet and the run finishes."""
+    import subprocess
+    import sys
+
+    make_image(tmp_path / "in.png")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "stipple", "torus", "in.png", "-M", "30", "-N", "8", "--iterations", "2", "-v"]
+        + ["-o", "a.csv"],
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+    )
+    process.stderr.close()  # the reader goes away before the first message
+    assert process.wait(timeout=120) == 0
+    assert (tmp_path / "a.csv").read_text().startswith("x,y\n")

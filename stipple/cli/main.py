@@ -79,6 +79,39 @@ def open_standard_streams():
                 os.close(opened)
     if sys.stderr is None:
         sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (for the whole process)
+    sys.stderr = MessagesUntilUnread(sys.stderr)
+
+
+class MessagesUntilUnread:
+    """stderr that goes quiet once nobody reads it: ``stipple torus ... 2>&1 | head -1`` stopped the run at its
+    next message (BrokenPipeError, exit 1, no output written), where the outputs are the run's result and the
+    messages only say how it went. From the first write to a closed pipe on, messages (and descriptor 2) go to
+    ``/dev/null``."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._unread()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._unread()
+
+    def _unread(self):
+        quiet = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(quiet, 2)
+        os.close(quiet)
+        self._stream = open(os.devnull, "w")  # noqa: SIM115 (for the rest of the process)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 # The thread counts the transform libraries read from the environment: ducc0 stopped the run with a traceback
