@@ -22,10 +22,9 @@ def stretch_levels(gray, levels):
 def auto_levels(gray, what="the image"):
     """``(black, white)`` that ``--levels auto`` stretches to 0 and 1: the 0.5th and 99.5th percentiles, which
     leave out a scan's specks and noise, or the extremes (``robust_extremes``) where the percentiles would clip a
-    feature (``clips_a_feature``); a StippleError naming ``what`` where ``gray`` has one value."""
+    feature (``feature_extremes``); a StippleError naming ``what`` where ``gray`` has one value."""
     low, high = np.percentile(gray, [0.5, 99.5])
-    if clips_a_feature(gray, low, high):
-        low, high = robust_extremes(gray)
+    low, high = feature_extremes(gray, low, high) or (low, high)
     if not low < high:
         raise StippleError(f"--levels auto: {what} has one gray value ({low:.3g}); nothing to stretch")
     return float(low), float(high)
@@ -46,26 +45,26 @@ NOISE_SPANS, FAINT_LEAST = 8.0, 0.05
 FEATURE_REACH = 0.5
 
 
-def clips_a_feature(values, low, high):
-    """Whether what lies beyond ``[low, high]`` is a feature that the percentiles would clip and widen (a small dark
-    spot on a plain page became a black disc): it differs from the rest more than the rest varies within it; or the
-    rest is a plain page (``plain_page``) and it reaches farther beyond than ``high - low`` (a soft spot, whose tail
-    varies within); or more than a scan's specks (``robust_extremes``) reach beyond by more than ``FEATURE_REACH``
-    of ``high - low`` (narrow peaks, whose tails vary within and leave no plain page)."""
+def feature_extremes(values, low, high):
+    """``robust_extremes`` where what lies beyond ``[low, high]`` is a feature that the percentiles would clip and
+    widen (a small dark spot on a plain page became a black disc), else None: it differs from the rest more than the
+    rest varies within it; or the rest is a plain page (``plain_page``) and it reaches farther beyond than
+    ``high - low`` (a soft spot, whose tail varies within); or more than a scan's specks (``robust_extremes``)
+    reach beyond by more than ``FEATURE_REACH`` of ``high - low`` (narrow peaks, whose tails vary within and leave
+    no plain page). The 3 x 3 median runs once, and for the last test only where the plain extremes reach that far
+    (it takes seconds on a large photo)."""
     beyond = np.sum(np.maximum(values - high, 0.0)) + np.sum(np.maximum(low - values, 0.0))
     if not beyond > 0:
-        return False
+        return None
     within = np.clip(values, low, high)
-    if beyond > np.sum(np.abs(within - np.median(within))):
-        return True
     reach = max(np.max(values) - high, low - np.min(values))
-    if reach > high - low and plain_page(values):
-        return True
-    # The median filter only where the plain extremes reach that far (it takes seconds on a large photo).
+    if beyond > np.sum(np.abs(within - np.median(within))) or (reach > high - low and plain_page(values)):
+        return robust_extremes(values)
     if not reach > FEATURE_REACH * (high - low):
-        return False
+        return None
     robust_low, robust_high = robust_extremes(values)
-    return bool(max(robust_high - high, low - robust_low) > FEATURE_REACH * (high - low))
+    reaches = max(robust_high - high, low - robust_low) > FEATURE_REACH * (high - low)
+    return (robust_low, robust_high) if reaches else None
 
 
 def robust_extremes(values):
