@@ -389,8 +389,6 @@ def _correct(problem, result, settings, stop, polish=None):
             return replace(result, status="stopped")
         result = replace(result, points=polished.points, iterations=result.iterations + polished.iterations)
     levels = WARM_LEVELS if settings.palette is None else COLOUR_WARM_LEVELS
-    if not levels:
-        return result
     result = correct_low_frequencies(problem, result, settings.time_limit, stop, levels=levels)
     if any(level.status == "stopped" for level in result.corrections):
         return replace(result, status="stopped")
