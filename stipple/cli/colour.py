@@ -9,12 +9,11 @@ from .defaults import INITS
 from .options import (
     backend_option,
     common_options,
-    given_count_hint,
     palette_options,
     resolve_input,
     without,
 )
-from .recipes import colour_recipe, run_pipeline
+from .recipes import colour_recipe, given_count_hint, run_pipeline
 
 
 @click.command()

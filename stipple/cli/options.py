@@ -422,18 +422,6 @@ def warn_outside(count, total, size, consequence):
         )
 
 
-def given_count_hint(darkness, options):
-    """Notes on stderr for a given -M drawn in a pen or plotter style (``stipple.render.pen_count.given_count_notes``:
-    tones its dots cannot reach, a point pen's dots too few for the image's ink); -M auto says its own."""
-    if options["quiet"] or options["n_points"] == "auto":
-        return
-    from ..render.pen_count import given_count_notes
-
-    notes = given_count_notes(darkness, options["n_points"], render_settings(options), bool(options.get("invert")))
-    for line in notes:
-        click.echo(f"stipple: note: {line}", err=True)
-
-
 def dot_radius(options):
     """``--dot-radius`` parsed, at most half the drawing's ``--width`` (a radius of 1 km drew for minutes), or None."""
     from ..io.units import UNITS, parse_length

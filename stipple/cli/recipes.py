@@ -7,7 +7,16 @@ from ..errors import StippleError
 from ..io.commit import FLAT_FORMATS, output_format
 from .defaults import INITS
 from .options import parse_levels, render_settings
-from .supervise import announcer, finish, guarded_files, report_run, run_keywords, supervised, write_outputs
+from .supervise import (
+    announcer,
+    echo_notes,
+    finish,
+    guarded_files,
+    report_run,
+    run_keywords,
+    supervised,
+    write_outputs,
+)
 
 
 def torus_recipe(options):
@@ -94,6 +103,16 @@ def check_colour_options(options):
         raise StippleError("--color and --background are for one-colour dots; colour separation prints on white paper")
 
 
+def given_count_hint(darkness, options):
+    """Notes on stderr for a given -M drawn in a pen or plotter style (``stipple.render.pen_count.given_count_notes``:
+    tones its dots cannot reach, a point pen's dots too few for the image's ink); -M auto says its own."""
+    if options["quiet"] or options["n_points"] == "auto":
+        return
+    from ..render.pen_count import given_count_notes
+
+    echo_notes(given_count_notes(darkness, options["n_points"], render_settings(options), bool(options.get("invert"))))
+
+
 def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers):
     """``pipeline(image, formats, recipe, session=..., **observers)`` with the files guarded, the run supervised
     (its progress, checkpoint and signal keywords are the ``session``), the settings announced (``--verbose``),
@@ -108,17 +127,11 @@ def run_pipeline(pipeline, image, recipe, options, inputs, started, **observers)
 
         outputs, stopped_by = supervised(options, launch)
         report_run(outputs.result, options)
-        report_notes(getattr(outputs, "notes", ()), options)
+        if not options["quiet"]:
+            echo_notes(outputs.notes)
         report_travel(outputs, options, recipe)
         write_outputs(options["outputs"], outputs.files, options["quiet"])
     finish(outputs.result, stopped_by, options, started)
-
-
-def report_notes(notes, options):
-    """The pipeline's notes on its outputs, one line each on stderr (unless ``--quiet``)."""
-    if not options["quiet"]:
-        for line in notes:
-            click.echo(f"stipple: note: {line}", err=True)
 
 
 def report_travel(outputs, options, recipe):

@@ -191,13 +191,18 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=(), formats=FORMATS)
         yield
 
 
+def echo_notes(lines):
+    """Each of ``lines`` on stderr as a note ("stipple: note: ...")."""
+    for line in lines:
+        click.echo(f"stipple: note: {line}", err=True)
+
+
 def write_outputs(paths, files, quiet=False):
     """Write every output all-or-nothing (``-`` is stdout): ``files`` maps each format to its bytes; its drawing's
     ``warnings`` (dots left out) go to stderr unless ``quiet``."""
     commit_outputs([(path, files[output_format(path)]) for path in paths])
     if not quiet:
-        for line in getattr(files, "warnings", ()):
-            click.echo(f"stipple: note: {line}", err=True)
+        echo_notes(getattr(files, "warnings", ()))
 
 
 def solve(problem, options, init, stop=None):

@@ -8,14 +8,13 @@ from ..errors import StippleError
 from .options import (
     backend_option,
     common_options,
-    given_count_hint,
     init_input,
     palette_options,
     render_settings,
     resolve_input,
     warn_beyond,
 )
-from .recipes import colour_recipe, run_pipeline, torus_recipe
+from .recipes import colour_recipe, given_count_hint, run_pipeline, torus_recipe
 
 
 @click.command()
