@@ -81,6 +81,11 @@ def default_png_width(count, canvas=(1.0, 1.0)):
     return max(1, min(side, int(TALLEST * side * width / height))) if height > 0 else side
 
 
+def picture_channels(colours):
+    """The channels of a picture in ``colours`` (RGB in [0, 1]): 1 where every one is a gray, else 3."""
+    return 1 if all(len(set(colour)) == 1 for colour in colours) else 3
+
+
 def float_picture_layers(channels=3):
     """Bytes a supersampled pixel takes while a picture is drawn through float coverage (``render_picture`` with
     the globe's outline or inks multiplied): per channel a float32 plane and its 8-bit band, and the layer's 8-bit
@@ -154,8 +159,7 @@ def render_picture(layers, size, pixels_wide, *, background=WHITE, pen_width=Non
     coverage mask first (the globe's outline; ``scale`` is ``png_canvas``'s ``(sx, sy)``), which is painted 8 % of
     the way from the background to the first layer's colour. The picture is grayscale when every colour is a gray.
     """
-    colours = [tuple(background)] + [tuple(dots.colour) for dots in layers]
-    channels = 1 if all(len(set(c)) == 1 for c in colours) else 3
+    channels = picture_channels([tuple(background)] + [tuple(dots.colour) for dots in layers])
     direct = blend == "over" and underlay is None
     check_png_canvas(size, pixels_wide, 2 if direct else float_picture_layers(channels))
     scale, canvas_size = png_canvas(size, pixels_wide)

@@ -14,7 +14,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..errors import StippleError
-from ..io.png import float_picture_layers
+from ..io.png import float_picture_layers, picture_channels
 from ..nearfield import check_pair_memory
 from ..tone import fit_inside, tone_radii_layers
 from ..tone.radii import canvas_pixels
@@ -359,7 +359,7 @@ def sphere_png_layers(projection, colours):
     straight onto an 8-bit canvas."""
     if projection != "ortho":
         return 2
-    return float_picture_layers(1 if all(len(set(colour)) == 1 for colour in colours) else 3)
+    return float_picture_layers(picture_channels(colours))
 
 
 GLOBE = 0.98  # the globe's radius over half the canvas

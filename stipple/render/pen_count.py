@@ -149,7 +149,7 @@ def auto_count(darkness, paper_width, style, pen_width):
     tone_points = int(round(ink / area))
     packing_points = packing_count(style, pen_width, paper)
     carried = carried_count(darkness, reachable, paper, area, packing_points)
-    count = int(round(AUTO_SHARE[style] * carried))
+    count = auto_points(style, carried)
     if count < 1:
         raise StippleError(
             f"-M auto: the image's ink ({ink:.3g} mm²) is less than one pen dot ({area:.3g} mm²); give -M"
@@ -163,6 +163,11 @@ def auto_count(darkness, paper_width, style, pen_width):
     return PenCount(
         count, tone_points, packing_points, area, ink, paper, float(reachable), darkest, carried_points=carried
     )
+
+
+def auto_points(style, carried):
+    """``-M auto``'s count of ``style``'s dots: ``AUTO_SHARE`` of the ``carried`` that carry the ink."""
+    return int(round(AUTO_SHARE[style] * carried))
 
 
 def carried_count(darkness, reachable, paper, area, packing):
@@ -281,7 +286,7 @@ def pen_count_notes(darkness, n_points, draw, inverted=False):
     if n_points <= carried:
         return []
     if style != "point":
-        auto = int(round(AUTO_SHARE[style] * carried))
+        auto = auto_points(style, carried)
         return [
             f"{dots} are more than the {carried} that carry the image's ink without touching (-M auto takes {auto}): "
             f"packed closer, they are placed more evenly and drawn smaller, and the picture comes out flatter and "
