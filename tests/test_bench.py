@@ -1,10 +1,14 @@
 """The benchmark script runs and writes the documented fields (no timing is asserted)."""
 
+import collections
 import json
 import os
 import runpy
 import sys
+import time
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -114,3 +118,51 @@ def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
         assert 0 <= quality["picture_sigma4_rmse"] < 0.1
     assert old["quality"] == new["quality"] == seeded["quality"] and entry["ratio_new_over_old"] > 0
     assert len(entry["ratios_per_round"]) == len(entry["ratios_seeded_per_round"]) == 2
+
+
+def load_phases():
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import phases
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    return phases
+
+
+def test_phase_clocks_count_a_call_handed_to_other_threads_once(monkeypatch):
+    """A clocked method that runs clocked methods of the same label on other threads (as the residue-split
+    transforms do) adds its own wall time once, not its parts' as well."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    phases = load_phases()
+
+    class Transform:
+        def part(self):
+            time.sleep(0.05)
+
+        def whole(self):
+            with ThreadPoolExecutor(2) as pool:
+                list(pool.map(lambda _: self.part(), range(2)))
+
+    monkeypatch.setattr(phases, "CLOCKS", collections.defaultdict(float))
+    monkeypatch.setattr(phases, "CALLS", collections.defaultdict(int))
+    for name in ("part", "whole"):
+        phases.clocked(Transform, name, "transforms", monkeypatch.setattr)
+    start = time.perf_counter()
+    Transform().whole()
+    elapsed = time.perf_counter() - start
+    assert phases.CALLS["transforms"] == 1
+    assert 0.05 <= phases.CLOCKS["transforms"] <= elapsed
+    Transform().part()
+    assert phases.CALLS["transforms"] == 2
+
+
+def test_phases_of_a_one_thread_command_are_disjoint(monkeypatch):
+    """On one thread the clocks nest as documented: no phase is negative (the transforms inside the discrepancy's
+    time, the discrepancy and the pairs inside the command's), and every phase ran."""
+    phases = load_phases()
+    record = phases.measure(ROOT / "samples" / "astronaut256.png", 3000, patch=monkeypatch.setattr)
+    seconds = record["seconds"]
+    assert all(seconds[name] > 0 for name in seconds), seconds
+    assert sum(value for name, value in seconds.items() if name != "command") == pytest.approx(seconds["command"])
+    assert record["full_searches"] >= 1 and record["calls"]["transforms"] > record["calls"]["discrepancy"] / 2
