@@ -1,6 +1,7 @@
 """The benchmark script runs and writes the documented fields (no timing is asserted)."""
 
 import collections
+import importlib
 import json
 import os
 import runpy
@@ -37,19 +38,19 @@ def test_quick_benchmark_writes_json(tmp_path, monkeypatch):
         assert (case["near_field_pairs"] > 0) == case["near_field"]
 
 
-def load_quality():
+def load_bench_module(name):
+    """A script of ``bench/`` as a module."""
     sys.path.insert(0, str(ROOT / "bench"))
     try:
-        import quality
+        return importlib.import_module(name)
     finally:
         sys.path.remove(str(ROOT / "bench"))
-    return quality
 
 
 def test_quality_inputs_have_the_documented_properties(tmp_path):
     import numpy as np
 
-    quality = load_quality()
+    quality = load_bench_module("quality")
     made = {name: make() for inputs in quality.SETS.values() for name, _, _, make in inputs}
     assert made["strip6x1"].shape == (200, 1200) and made["strip4x1"].shape == (300, 1200)
     for name in ("silhouette", "silhouette2"):
@@ -120,21 +121,12 @@ def test_paired_whole_commands_report_both_versions_and_their_quality(tmp_path):
     assert len(entry["ratios_per_round"]) == len(entry["ratios_seeded_per_round"]) == 2
 
 
-def load_phases():
-    sys.path.insert(0, str(ROOT / "bench"))
-    try:
-        import phases
-    finally:
-        sys.path.remove(str(ROOT / "bench"))
-    return phases
-
-
 def test_phase_clocks_count_a_call_handed_to_other_threads_once(monkeypatch):
     """A clocked method that runs clocked methods of the same label on other threads (as the residue-split
     transforms do) adds its own wall time once, not its parts' as well."""
     from concurrent.futures import ThreadPoolExecutor
 
-    phases = load_phases()
+    phases = load_bench_module("phases")
 
     class Transform:
         def part(self):
@@ -160,7 +152,7 @@ def test_phase_clocks_count_a_call_handed_to_other_threads_once(monkeypatch):
 def test_phases_of_a_one_thread_command_are_disjoint(monkeypatch):
     """On one thread the clocks nest as documented: no phase is negative (the transforms inside the discrepancy's
     time, the discrepancy and the pairs inside the command's), and every phase ran."""
-    phases = load_phases()
+    phases = load_bench_module("phases")
     record = phases.measure(ROOT / "samples" / "astronaut256.png", 3000, patch=monkeypatch.setattr)
     seconds = record["seconds"]
     assert all(seconds[name] > 0 for name in seconds), seconds
