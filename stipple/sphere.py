@@ -252,7 +252,7 @@ def sphere_problem(
         stratified=density.stratified if picture else None,
         level=same if picture else None,
         split=partial(split_sphere_points, density.cell_map(), threads=threads) if picture else None,
-        spread=(lambda points: spread_close_sphere(points, local_density(density, points))) if picture else None,
+        spread=partial(spread_sphere_points, density, threads=threads) if picture else None,
         settings={
             "domain": "sphere",
             "points": n_points,
@@ -263,6 +263,11 @@ def sphere_problem(
             "metric": "density" if scaled else "flat",
         },
     )
+
+
+def spread_sphere_points(density, points, threads=1):
+    """The spread step (``stipple.spread``) of ``points`` at ``density``'s dots per steradian."""
+    return spread_close_sphere(points, local_density(density, points), threads=threads)
 
 
 def sphere_objective(density, n_points, bandwidth, kernel, near_field, threads, accuracy):

@@ -39,7 +39,7 @@ def hexagonal_spacing_at(points, weights):
         return hexagonal_spacing(density, 1.0)
 
 
-def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
+def spread_close(points, weights, target=None, passes=SPREAD_PASSES, threads=1):
     """Move every dot closer to its nearest neighbour than ``target`` times its hexagonal spacing
     (``hexagonal_spacing_at``) away from that neighbour by half the shortfall, ``passes`` times.
 
@@ -50,12 +50,13 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     pixel grid, as in ``stipple.measures.evaluate.torus_neighbours``). Within a pass all dots move at once, each by at
     most ``target / 2`` of the smaller spacing of it and its neighbour; dots in pixels of zero density never move.
     Returns the new points (unit coordinates, in ``[0, 1)``) and the number of dots moved in the first pass.
+    ``threads``: the nearest-neighbour queries' workers (the same result for any count).
     """
     rows, columns = weights.shape
     size = np.array([columns, rows], dtype=float)
 
     def nearest(pixels):
-        distance, neighbour = cKDTree(pixels, boxsize=size).query(pixels, k=2)
+        distance, neighbour = cKDTree(pixels, boxsize=size).query(pixels, k=2, workers=threads)
         return distance[:, 1], neighbour[:, 1]
 
     def step_away(pixels, close, neighbour, distance, length):
@@ -74,7 +75,7 @@ def spread_close(points, weights, target=None, passes=SPREAD_PASSES):
     return pixels / size, moved
 
 
-def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES):
+def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES, threads=1):
     """``spread_close`` on the sphere: ``points`` are ``(M, 3)`` unit vectors, ``local_density`` the dots per
     steradian at each (``M w(p) / int w``; 0 where the density is), distances geodesic; a dot moves along the
     great circle away from its nearest neighbour. Returns the new unit vectors and the number moved in the first
@@ -83,7 +84,7 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
         spacing = hexagonal_spacing(np.asarray(local_density, dtype=float), 1.0)
 
     def nearest(vectors):
-        chord, neighbour = cKDTree(vectors).query(vectors, k=2)
+        chord, neighbour = cKDTree(vectors).query(vectors, k=2, workers=threads)
         # A dot without a neighbour (M = 1) keeps its infinite distance: clamped to pi, it was "close" to the
         # missing neighbour, and stipple sphere -M 1 ended in an IndexError (a hostile review).
         with np.errstate(invalid="ignore"):

@@ -245,7 +245,7 @@ def torus_problem(
         coarse=lambda coarse_bandwidth: same(n_points, coarse_bandwidth, near_field=False),
         level=lambda count: same(count, hessian=hessian, near_field=near_field, bandwidth_factor=bandwidth_factor),
         split=lambda points, count: split_points(weights, points, count, scale, threads),
-        spread=(lambda points: spread_close(points, weights)) if precondition else None,
+        spread=(lambda points: spread_close(points, weights, threads=threads)) if precondition else None,
         settings={
             "domain": "torus",
             "points": n_points,

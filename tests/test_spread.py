@@ -218,3 +218,36 @@ def test_a_dot_on_a_faint_fringe_moves_no_farther_than_its_dense_neighbour_allow
     density = np.append(np.full(len(lattice), dense), 1e-3)  # the fringe's own spacing: about 3 radians
     spread, _ = spread_close_sphere(points, density, target=0.78)
     assert geodesic(spread[-1], fringe) <= SPREAD_PASSES * 0.5 * 0.78 * spacing
+
+
+def test_the_spread_step_gives_the_same_bits_on_any_number_of_threads(rng):
+    """The nearest-neighbour queries run on the problem's threads: every query is its own, so the moves do not
+    depend on the count (the torus and the sphere)."""
+    weights = rng.random((40, 60)) + 0.2
+    points = rng.random((5000, 2))
+    one, moved = spread_close(points, weights, target=0.85)
+    assert moved > 0
+    for threads in (2, 3):
+        assert np.array_equal(spread_close(points, weights, target=0.85, threads=threads)[0], one)
+    vectors = Sphere().random(rng, 5000)
+    local = local_density(CellMap(rng.random((30, 60)) + 0.2), vectors)
+    one = spread_close_sphere(vectors, local, target=0.85)[0]
+    assert np.array_equal(spread_close_sphere(vectors, local, target=0.85, threads=2)[0], one)
+
+
+def test_problems_spread_on_their_threads(monkeypatch):
+    """``torus_problem`` and ``sphere_problem`` hand their thread count to the spread step."""
+    import stipple.sphere
+    import stipple.torus
+
+    seen = []
+
+    def recorded(function):
+        return lambda *args, **kwargs: seen.append(kwargs["threads"]) or function(*args, **kwargs)
+
+    monkeypatch.setattr(stipple.torus, "spread_close", recorded(spread_close))
+    monkeypatch.setattr(stipple.sphere, "spread_close_sphere", recorded(spread_close_sphere))
+    rng = np.random.default_rng(0)
+    torus_problem(np.ones((16, 16)), 100, threads=3).spread(rng.random((100, 2)))
+    sphere_problem(np.ones((20, 40)) + np.eye(20, 40), 100, threads=3).spread(Sphere().random(rng, 100))
+    assert seen == [3, 3]
