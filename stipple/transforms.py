@@ -94,7 +94,9 @@ class TorusFourier:
 
     def gradient_synthesis(self, coeffs):
         """Tangent fields ``Re sum_n a_n (2 pi i n) e^{2 pi i n.u_i}`` for a list of Hermitian arrays."""
-        packed = np.empty((len(coeffs),) + self.nufft.shape, dtype=np.complex128)
+        # Products made in double precision and stored in the transform's own (the values its conversion gave):
+        # no grid-sized double-precision array, no second pass to convert it.
+        packed = np.empty((len(coeffs),) + self.nufft.shape, dtype=precision(self.nufft.epsilon)[1])
         for out, a in zip(packed, coeffs, strict=True):
             map_blocks(self.threads, np.multiply, self._synthesis_factor, a, out)
         values = self.nufft.type2(packed)

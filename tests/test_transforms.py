@@ -142,3 +142,25 @@ def test_single_precision_transforms_against_direct_sums(monkeypatch, backend, t
 def test_precision_follows_epsilon():
     assert precision(SINGLE_PRECISION_EPSILON) == (np.float32, np.complex64)
     assert precision(1e-7) == (np.float64, np.complex128)
+
+
+def test_single_precision_gradient_synthesis_rounds_its_products_once_in_place(rng):
+    """The gradient's coefficients times ``2 pi i (n1 + i n2)`` are made in double precision and stored straight
+    in the transform's single precision: the bits of converting the double-precision products, without a
+    grid-sized double-precision array or a converted copy (tracemalloc sees numpy's arrays)."""
+    import tracemalloc
+
+    shape = (201, 301)
+    fourier = TorusFourier(make_nufft("ducc0", shape, 1e-4, 1), analysis_epsilon=1e-7)
+    fourier.set_points(rng.random((500, 2)))
+    coeffs = rng.standard_normal(shape) + 1j * rng.standard_normal(shape)
+    converted = (fourier._synthesis_factor * coeffs).astype(np.complex64)
+    expected = fourier.nufft.type2(converted[None])[0]
+    tracemalloc.start()
+    try:
+        (field,) = fourier.gradient_synthesis([coeffs])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert np.array_equal(field, np.stack([expected.real, expected.imag], axis=1))
+    assert peak < 1.5 * np.prod(shape) * np.dtype(np.complex64).itemsize
