@@ -9,8 +9,6 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -155,6 +153,6 @@ def test_phases_of_a_one_thread_command_are_disjoint(monkeypatch):
     phases = load_bench_module("phases")
     record = phases.measure(ROOT / "samples" / "astronaut256.png", 3000, patch=monkeypatch.setattr)
     seconds = record["seconds"]
+    # ``rest`` is the command less the discrepancy and the pairs: positive only if neither was counted twice.
     assert all(seconds[name] > 0 for name in seconds), seconds
-    assert sum(value for name, value in seconds.items() if name != "command") == pytest.approx(seconds["command"])
     assert record["full_searches"] >= 1 and record["calls"]["transforms"] > record["calls"]["discrepancy"] / 2
