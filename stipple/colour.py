@@ -22,14 +22,9 @@ import numpy as np
 from .errors import StippleError
 from .io.images import LUMA, load_colour
 from .multiclass import multiclass_problem, run
+from .tone.inks import INK_COLOURS, SEPARATION_INKS
 
-SEPARATIONS = ("cmyk", "cmy", "gray")
-INK_COLOURS = {
-    "cyan": (0.0, 1.0, 1.0),
-    "magenta": (1.0, 0.0, 1.0),
-    "yellow": (1.0, 1.0, 0.0),
-    "black": (0.0, 0.0, 0.0),
-}
+SEPARATIONS = tuple(SEPARATION_INKS)
 TIE_BREAK = 1e-3
 MAX_PENS = 8
 MIN_ABSORPTANCE = 0.05
@@ -139,7 +134,7 @@ def separate(rgb, separation="cmyk", black=1.0):
     else:
         inks = 1.0 - rgb
         grey = black * inks.min(axis=2) if separation == "cmyk" else np.zeros(rgb.shape[:2])
-        densities = {name: inks[..., index] - grey for index, name in enumerate(("cyan", "magenta", "yellow"))}
+        densities = {name: inks[..., index] - grey for index, name in enumerate(SEPARATION_INKS["cmy"])}
         densities["black"] = grey
     return _with_mass([Layer(name, INK_COLOURS[name], np.maximum(value, 0.0)) for name, value in densities.items()])
 
@@ -166,7 +161,7 @@ def palette_inks(separation):
     """The names of ``separation``'s inks in its order (``separate``'s, before inks without mass are left out)."""
     if not isinstance(separation, str):
         return [name for name, _ in separation]
-    return {"gray": ["black"], "cmy": ["cyan", "magenta", "yellow"]}.get(separation, list(INK_COLOURS)[:4])
+    return list(SEPARATION_INKS.get(separation, SEPARATION_INKS["cmyk"]))
 
 
 def check_palette_extras(palette, black, union_weight=1.0):

@@ -5,7 +5,13 @@ import numpy as np
 from ..errors import StippleError
 from ..io.images import LUMA
 
-MULTIPLY_SEPARATIONS = ("cmyk", "cmy", "gray")
+# Each separation's inks, in their order (``stipple.colour.separate``'s layers and palette numbers, and here).
+SEPARATION_INKS = {
+    "cmyk": ("cyan", "magenta", "yellow", "black"),
+    "cmy": ("cyan", "magenta", "yellow"),
+    "gray": ("black",),
+}
+MULTIPLY_SEPARATIONS = tuple(SEPARATION_INKS)
 INK_COLOURS = {
     "cyan": (0.0, 1.0, 1.0),
     "magenta": (1.0, 0.0, 1.0),
@@ -50,7 +56,7 @@ def multiply_separation(rgb, separation="cmyk"):
         raise StippleError(f"separation must be one of {', '.join(MULTIPLY_SEPARATIONS)}, not {separation!r}")
     if separation == "gray":
         return [("black", INK_COLOURS["black"], np.clip(1.0 - rgb @ LUMA, 0.0, 1.0))]
-    names = ("cyan", "magenta", "yellow")
+    names = SEPARATION_INKS["cmy"]
     if separation == "cmy":
         return [(name, INK_COLOURS[name], 1.0 - rgb[..., i]) for i, name in enumerate(names)]
     brightest = rgb.max(axis=2)
