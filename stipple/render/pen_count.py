@@ -142,13 +142,10 @@ def auto_count(darkness, paper_width, style, pen_width):
         For a disc style, an image without ink, or a count beyond ``MAX_POINTS``.
     """
     darkness = np.asarray(darkness, dtype=np.float64)
-    area, _ = pen_dot(style, pen_width)
-    paper = paper_area(paper_width, darkness.shape)
+    paper, area, packing_points, carried = pen_capacity(darkness, paper_width, style, pen_width)
     ink = float(darkness.mean()) * paper
     reachable = reachable_tone(style, pen_width)
     tone_points = int(round(ink / area))
-    packing_points = packing_count(style, pen_width, paper)
-    carried = carried_count(darkness, reachable, paper, area, packing_points)
     count = auto_points(style, carried)
     if count < 1:
         raise StippleError(
@@ -163,6 +160,15 @@ def auto_count(darkness, paper_width, style, pen_width):
     return PenCount(
         count, tone_points, packing_points, area, ink, paper, float(reachable), darkest, carried_points=carried
     )
+
+
+def pen_capacity(darkness, paper_width, style, pen_width):
+    """``(paper, area, packing, carried)``: the paper's mm², a pen dot's, the most dots that fit without touching
+    (``packing_count``) and the dots that carry the ink the pen reaches (``carried_count``)."""
+    paper = paper_area(paper_width, darkness.shape)
+    area, _ = pen_dot(style, pen_width)
+    packing = packing_count(style, pen_width, paper)
+    return paper, area, packing, carried_count(darkness, reachable_tone(style, pen_width), paper, area, packing)
 
 
 def auto_points(style, carried):
@@ -272,10 +278,7 @@ def pen_count_notes(darkness, n_points, draw, inverted=False):
     RMSE 0.27 at 4 px, against 0.08 at -M auto's ``AUTO_SHARE`` of them)."""
     style = draw["dot_style"]
     paper_width, pen_width = paper_and_pen(draw)
-    paper = paper_area(paper_width, darkness.shape)
-    area, _ = pen_dot(style, pen_width)
-    packing = packing_count(style, pen_width, paper)
-    carried = carried_count(darkness, reachable_tone(style, pen_width), paper, area, packing)
+    paper, area, packing, carried = pen_capacity(darkness, paper_width, style, pen_width)
     light, dark = (INVERTED_WORDS if inverted else TONE_WORDS)[1::-1]
     dots = f"{n_points} {style} dots of a {pen_width:g} mm pen"
     if style == "point" and n_points < LIGHT_SHARE * carried:
