@@ -56,9 +56,7 @@ def test_an_ink_without_dots_leaves_its_layer_number_free_and_is_named(tmp_path,
     """A held-out review: on a photo whose cyan got no dots, magenta became layer 1 of the SVG (and of vpype), so
     every pen after it moved a slot, and nothing said cyan was empty. A red and white image has no cyan and no
     black: magenta and yellow keep layers 2 and 3."""
-    pixels = np.full((12, 16, 3), 255, dtype=np.uint8)
-    pixels[:, :8] = (255, 0, 0)
-    Image.fromarray(pixels).save(tmp_path / "red.png")
+    red_and_white(tmp_path / "red.png")
     args = ["colour", tmp_path / "red.png", "-M", 60, "--iterations", 2, *style, "-o", tmp_path / "dots.svg"]
     result = run(args)
     assert result.exit_code == 0, result.output
@@ -128,15 +126,20 @@ def test_vpype_plugin_keeps_an_inks_layer_number_where_an_earlier_ink_has_no_dot
     vpype = pytest.importorskip("vpype", reason="vpype is not installed (pip install 'stipple[plotter]')")
     import vpype_cli
 
-    pixels = np.full((12, 16, 3), 255, dtype=np.uint8)
-    pixels[:, :8] = (255, 0, 0)
-    Image.fromarray(pixels).save(tmp_path / "red.png")
+    red_and_white(tmp_path / "red.png")
     document = vpype_cli.execute(
         f"stipple -M 60 --separation cmyk --iterations 2 --dot-style filled --width 80mm --pen-width 0.3mm "
         f"{tmp_path / 'red.png'}"
     )
     names = {number: layer.property(vpype.METADATA_FIELD_NAME) for number, layer in document.layers.items()}
     assert names == {2: "magenta", 3: "yellow"}
+
+
+def red_and_white(path):
+    """A 16 x 12 image, red on the left and white on the right: magenta and yellow ink, no cyan, no black."""
+    pixels = np.full((12, 16, 3), 255, dtype=np.uint8)
+    pixels[:, :8] = (255, 0, 0)
+    Image.fromarray(pixels).save(path)
 
 
 def composite_svg(svg, shape, per_pixel=8):
