@@ -193,6 +193,38 @@ def initial_points(problem, init, rng):
     return problem.manifold.canonical(points)
 
 
+# A given start's dots at one place are moved apart, the k-th after the first by PARTED_SPACING sqrt(k) mean
+# spacings at k golden angles (a sunflower around the place): dots on top of each other have the same gradient in
+# every objective, and no run parted them (a hostile sweep: 300 such dots ended as one on the sphere).
+PARTED_SPACING = 0.5
+GOLDEN_ANGLE = np.pi * (3 - np.sqrt(5))
+
+
+def part_coincident(manifold, points):
+    """``(points, moved)``: ``points`` with every point that repeats an earlier one (exactly) moved apart from it
+    (``PARTED_SPACING``), and how many moved."""
+    if not _has_repeats(points[:, 0]):
+        return points, 0
+    order = np.lexsort(points.T[::-1])
+    ranked = points[order]
+    starts = np.flatnonzero(np.r_[True, np.any(ranked[1:] != ranked[:-1], axis=1)])
+    rank = np.arange(len(points)) - np.repeat(starts, np.diff(np.r_[starts, len(points)]))
+    moved = order[rank > 0]
+    if moved.size == 0:
+        return points, 0
+    rank = rank[rank > 0].astype(float)
+    lengths = PARTED_SPACING * np.sqrt(manifold.area / len(points)) * np.sqrt(rank)
+    points = points.copy()
+    points[moved] = manifold.offset(points[moved], lengths, GOLDEN_ANGLE * rank)
+    return points, moved.size
+
+
+def _has_repeats(values):
+    """Whether any value repeats (a cheap first look: points that share a place share their first coordinate)."""
+    ordered = np.sort(values)
+    return bool(np.any(ordered[1:] == ordered[:-1]))
+
+
 def run(
     problem,
     *,
@@ -213,6 +245,7 @@ def run(
     correct=True,
     levels=True,
     spread=True,
+    part=True,
 ):
     """Optimise ``problem`` from ``init``, or resume it from a checkpoint, and collect the result.
 
@@ -249,6 +282,9 @@ def run(
         Where the problem has a ``spread`` step, apply it to the main run's points and follow it with
         ``SPREAD_ITERATIONS`` CG iterations (``spread_close_dots``), before the correction; not after a run that
         reached its time limit, made no iteration or was stopped by ``callback``.
+    part : bool
+        Move a given start's dots that share a place apart first (``part_coincident``): nothing else would. A
+        video's warm frames keep theirs (pinned dots stay where they are).
     """
     from .checkpoint import Checkpointer, load_checkpoint
 
@@ -276,7 +312,7 @@ def run(
     if resume:
         state = load_checkpoint(checkpoint, problem)
     else:
-        state, start_stopped = _start_state(problem, init, seed, levels, time_limit, callback)
+        state, start_stopped = _start_state(problem, init, seed, levels, time_limit, callback, part)
         # A start stopped half-way (the coarse levels) is not the uninterrupted run's: nothing to resume from.
         saver = None if start_stopped else saver
     corrects = correct and problem.coarse is not None and correction_bandwidth(problem) >= 4 * max(COARSE_LEVELS)[0]
@@ -311,13 +347,13 @@ def run(
     return result
 
 
-def _start_state(problem, init, seed, levels, time_limit, callback):
+def _start_state(problem, init, seed, levels, time_limit, callback, part=True):
     """CG's first state from ``init`` (the coarse-to-fine start for "stratified" where the problem has levels and
-    ``levels`` asks for it), and whether ``callback`` stopped the levels; ``tol``'s reference is the gradient norm
-    at i.i.d. samples for the stratified start."""
+    ``levels`` asks for it; given points parted with ``part``), and whether ``callback`` stopped the levels;
+    ``tol``'s reference is the gradient norm at i.i.d. samples for the stratified start and a parted one."""
     rng = np.random.default_rng(seed)
     stratified = isinstance(init, str) and init == "stratified" and problem.stratified is not None
-    stops = []
+    stops, parted = [], 0
     if stratified and levels and problem.level is not None:
         share = None if time_limit is None else time_limit * LEVELS_TIME_SHARE
 
@@ -328,8 +364,11 @@ def _start_state(problem, init, seed, levels, time_limit, callback):
         start = coarse_to_fine(problem, rng, time_limit=share, callback=None if callback is None else watched)
     else:
         start = initial_points(problem, init, rng)
+        if part and not isinstance(init, str):
+            start, parted = part_coincident(problem.manifold, start)
     reference = None
-    if stratified:
+    if stratified or parted:
+        # A parted start's clumps have a steep gradient: relative to it, tol would stop the run early.
         reference = iid_gradient_norm(problem, rng)
     state = initial_state(problem.objective, problem.manifold, start)
     state.initial_gradient_norm = state.initial_gradient_norm if reference is None else reference

@@ -49,6 +49,16 @@ class Torus:
     def random(self, rng, count):
         return rng.random((count, 2))
 
+    @property
+    def area(self):
+        """The domain's area in the metric's units (of ``scale``)."""
+        return float(np.prod(self.scale))
+
+    def offset(self, points, lengths, angles):
+        """Each point moved ``lengths`` (in the units of ``scale``) in the direction at ``angles`` from the x axis."""
+        directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+        return self.retract(points, np.asarray(lengths, dtype=float)[:, None] * directions / self.scale)
+
 
 class PointFactors:
     """A factor (or a row of them) per point from a lookup, kept for the last ``points`` array, which CG asks about
@@ -193,6 +203,18 @@ class Sphere:
         points = rng.standard_normal((count, 3))
         return points / np.linalg.norm(points, axis=1, keepdims=True)
 
+    area = 4 * np.pi
+
+    def offset(self, points, lengths, angles):
+        """Each point moved ``lengths`` (radians) along the great circle at ``angles`` in its tangent plane,
+        measured from the tangent ``x × e`` with ``e`` the coordinate axis least aligned with the point ``x``."""
+        axes = np.eye(3)[np.argmin(np.abs(points), axis=1)]
+        first = np.cross(points, axes)
+        first /= np.linalg.norm(first, axis=1, keepdims=True)
+        second = np.cross(points, first)
+        directions = np.cos(angles)[:, None] * first + np.sin(angles)[:, None] * second
+        return self.retract(points, np.asarray(lengths, dtype=float)[:, None] * directions)
+
 
 def _dot_rows(u, v):
     return float(np.einsum("ij,ij->", u, v))
@@ -299,6 +321,10 @@ class Rectangle(Torus):
 
     def canonical(self, points):
         return np.clip(np.asarray(points, dtype=np.float64), self.low, self.high)
+
+    @property
+    def area(self):
+        return float(np.prod(self.scale * (self.high - self.low)))
 
     def inward(self, points):
         """Image unit coordinates to torus unit coordinates."""

@@ -327,8 +327,8 @@ def _warm(problem, previous, free, settings, stop, change):
     after a scene cut, ``change`` above ``CUT``, up to ``iterations``), then, where the darkness changed at all,
     the correction over all dots (``_correct``)."""
     # Without the spread step, which a warm frame cannot pay for: it needs CG iterations over all dots and the
-    # correction after it (docs/video.md).
-    options = {**_run_options(settings, stop), "spread": False}
+    # correction after it (docs/video.md); its pinned dots, and a colour frame's inks on each other, stay put.
+    options = {**_run_options(settings, stop), "spread": False, "part": False}
     changed = change > 0
     if not free.any() and not (changed and settings.correct):
         return run(problem, init=previous, iterations=0, correct=False, **options)

@@ -84,6 +84,37 @@ def test_evaluate_a_line(ramp_path, tmp_path):
     assert "max over mean segment: 1.0" in result.output
 
 
+def test_evaluate_measures_the_vertices_own_measure_of_any_line(ramp_path, tmp_path):
+    # The vertices' equal-weight measure carries the image's mass, so that E_N of i.i.d. points is positive;
+    # before, the run's K nodes per segment gave the vertices 1/K of it, a negative expectation, and a line
+    # shorter than `stipple line` allows was refused for its --length.
+    from stipple.measures.reports import evaluate_line_points
+
+    for corners in ([[10, 10], [15, 10], [15, 15], [10, 15]], [[2, 2], [46, 2], [46, 30], [2, 30]]):
+        pixels = np.array(corners, dtype=float)
+        report = evaluate_line_points(pixels, "torus", ramp_path, None, {"invert": False, "gamma": 1.0, "levels": None})
+        assert report["expected_iid_energy"] > 0 and report["energy"] > 0
+        assert np.isclose(report["length_pixels"], 2 * np.ptp(pixels, axis=0).sum())
+    csv = tmp_path / "square.csv"
+    np.savetxt(csv, [[10, 10], [15, 10], [15, 15], [10, 15]], delimiter=",", header="x,y", comments="")
+    result = run(["evaluate", "--line", csv, ramp_path])
+    assert result.exit_code == 0, result.output
+    assert float(re.search(r"ratio to i.i.d.: ([-0-9.e+]+)", result.output).group(1)) > 0
+    np.savetxt(csv, [[20, 20]] * 8, delimiter=",", header="x,y", comments="")
+    result = run(["evaluate", "--line", csv, ramp_path])
+    assert result.exit_code == 1 and "the line has length 0: all its vertices are at one place" in result.output
+
+
+def test_a_line_from_vertices_at_one_place_is_parted_into_a_loop(ramp_path, tmp_path):
+    start, out = tmp_path / "start.csv", tmp_path / "line.csv"
+    np.savetxt(start, [[20, 20]] * 8, delimiter=",", header="x,y", comments="")
+    result = run(["line", ramp_path, "-M", 8, "--init", start, "--iterations", 20, "-q", "-o", out])
+    assert result.exit_code == 0, result.output
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert len(np.unique(table, axis=0)) == 8
+    assert np.linalg.norm(np.roll(table, -1, axis=0) - table, axis=1).min() > 1.0
+
+
 def test_line_resumes_from_its_checkpoint(ramp_path, tmp_path):
     checkpoint, first, second = tmp_path / "run.npz", tmp_path / "a.csv", tmp_path / "b.csv"
     args = ["line", ramp_path, "-M", 200, "-q", "--checkpoint", checkpoint]

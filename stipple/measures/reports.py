@@ -10,7 +10,7 @@ from ..colour import check_layer_names, parse_palette, separate
 from ..errors import MissingInput, StippleError
 from ..io.images import NPY_MAGIC, given_transfer, load_colour, load_density, load_input
 from ..io.sources import STDIN_NAME, read_source, source_or_stdin
-from ..line.problem import line_problem
+from ..line.problem import length_bounds, line_problem
 from ..multiclass import class_bandwidth
 from ..render.pen import closed_length
 from ..sphere import sphere_density, sphere_problem
@@ -50,7 +50,15 @@ def evaluate_line_points(pixels, domain, input_source, bandwidth, options):
     if domain != "torus":
         raise StippleError("--line needs a CSV of x,y vertices and the image they were drawn from")
     weights = load_input(input_source, **image_transfer(options))
-    problem = line_problem(weights, len(pixels), closed_length(pixels), bandwidth, epsilon=1e-10)
+    length = closed_length(pixels)
+    if not length > 0:
+        raise StippleError("the line has length 0: all its vertices are at one place")
+    # The length sets only the measuring torus's blank margin and its bandwidth: any line is measured, a short or a
+    # long one on the torus of the nearest length that ``stipple line`` allows.
+    length = float(np.clip(length, *length_bounds(weights.shape)))
+    # One node per segment: the measure is the vertices' own (with the run's nodes, the vertices carried 1 / K
+    # of the image's mass, and the i.i.d. expectation came out negative: a hostile sweep).
+    problem = line_problem(weights, len(pixels), length, bandwidth, epsilon=1e-10, subdivisions=1)
     return evaluate_line(problem, pixels / np.array([weights.shape[1], weights.shape[0]]), weights)
 
 
