@@ -79,6 +79,16 @@ def test_read_only_outputs_are_not_replaced(folder):
     refused(["torus", "in.png", *FAST, "-o", "old.svg"], folder, "old.svg: is read-only")
 
 
+def test_batch_makes_no_folder_in_a_read_only_one(folder):
+    # As torus -o refuses a file there, even for root, who could write into it (a hostile sweep).
+    (folder / "sub").chmod(0o555)
+    try:
+        refused(["batch", "in.png", *FAST, "-d", "sub/new/out"], folder, "(the folder " + str(folder / "sub"))
+        assert not (folder / "sub" / "new").exists()
+    finally:
+        (folder / "sub").chmod(0o755)
+
+
 @pytest.mark.parametrize("source", ["frames", "frames/*.png"])
 @pytest.mark.parametrize("output", ["d.csv", "out.mp4"])
 def test_a_video_output_linked_to_a_frame_image_is_refused(folder, source, output):

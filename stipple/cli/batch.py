@@ -1,7 +1,6 @@
 """``stipple batch``: many images, each stippled as ``stipple torus`` would, here or on a Dask cluster."""
 
 import copy
-import os
 import sys
 import time
 from dataclasses import replace
@@ -9,7 +8,7 @@ from dataclasses import replace
 import click
 
 from ..errors import StippleError
-from ..io.commit import check_folder, check_writable
+from ..io.commit import check_writable, make_folder
 from .defaults import INITS
 from .recipes import torus_recipe
 from .torus import torus
@@ -117,11 +116,7 @@ def plan(inputs, options):
     if not str(out_dir).strip():  # it said "Error: : cannot make the output folder"
         raise StippleError("-d: an empty folder name (an unset shell variable?)")
     jobs = plan_batch(expand_images(inputs), out_dir, formats, recipe)
-    try:
-        os.makedirs(out_dir, exist_ok=True)
-    except OSError as error:
-        raise StippleError(f"{out_dir}: cannot make the output folder ({error.strerror or error})") from None
-    check_folder(out_dir)
+    make_folder(out_dir)
     for job in jobs:
         if options["force"] or not is_done(job):
             for _, path in job.outputs:

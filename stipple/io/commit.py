@@ -74,6 +74,23 @@ def through_links(path):
     return os.path.realpath(path) if os.path.islink(path) else path
 
 
+def make_folder(directory):
+    """Make the output folder ``directory`` (and its missing parents) unless it exists, then ``check_folder`` it.
+    A missing folder is refused where the nearest existing one above it is read-only by its mode, as
+    ``check_writable`` refuses a file there, even for root (who could write into it: a hostile sweep)."""
+    if not os.path.isdir(directory):
+        above = os.path.dirname(os.path.abspath(directory))
+        while not os.path.exists(above):
+            above = os.path.dirname(above)
+        if os.path.isdir(above) and not os.stat(above).st_mode & 0o222:
+            raise StippleError(f"{directory}: cannot make the output folder (the folder {above} is read-only)")
+        try:
+            os.makedirs(directory, exist_ok=True)
+        except OSError as error:
+            raise StippleError(f"{directory}: cannot make the output folder ({error.strerror or error})") from None
+    check_folder(directory)
+
+
 def check_folder(directory):
     """Raise, naming ``directory``, unless it is a folder that can take new files."""
     if not os.path.isdir(directory):
