@@ -91,3 +91,17 @@ def test_float_tiffs_out_of_range_are_refused(folder, values, shown):
     (folder / "f.tiff").write_bytes(tiff_bytes(np.array(values)).getvalue())
     refused(run_torus(folder, "f.tiff"), folder, "float image values must lie in [0, 1], [0, 255] or [0, 65535]")
     assert shown in invoke(run_torus(folder, "f.tiff"), folder).stderr
+
+
+@pytest.mark.parametrize(
+    "args, starts",
+    [
+        (["torus", "in.png", *FAST, "-o", "new.csv", "--init", "stratifed"], "stratified, density, uniform"),
+        (["sphere", "map.npy", "-M", "30", "-N", "4", "-o", "new.csv", "--init", "lattice"], "stratified, density"),
+        (["design", "-t", "4", "-o", "new.csv", "--init", "fibonacci"], "auto, lattice, uniform"),
+    ],
+    ids=["torus", "sphere", "design"],
+)
+def test_a_mistyped_start_names_the_starts_and_the_file(folder, args, starts):
+    # It said only "cannot read stratifed: No such file or directory".
+    refused(args, folder, f"--init: {args[-1]!r} is neither a start ({starts}")

@@ -10,6 +10,7 @@ from ..render.styles import PROJECTIONS
 from .options import (
     apply_options,
     config_option,
+    init_input,
     output_options,
     parse_view,
     render_settings,
@@ -96,7 +97,7 @@ def design(ctx, **options):
             raise StippleError(f"error must be a number in (0, 1), not {options['error']!r}")
         settings = render_settings(options)
         view = parse_view(options["view"], options["projection"])
-        init_file = [] if options["init"] in STARTS else [("--init file", options["init"])]
+        init_file = [role for role in [init_input(options["init"], STARTS)] if role is not None]
         with guarded_files(init_file, options["outputs"], options["checkpoint"]):
             epsilon = DESIGN_EPSILON if options["epsilon"] is None else options["epsilon"]
             problem = design_problem(

@@ -1,6 +1,7 @@
 """Option groups shared by the commands, and the conversions of their values (lengths, colours, views)."""
 
 import math
+import os
 
 import click
 
@@ -372,9 +373,14 @@ def check_longitude(name, value):
     return float(value)
 
 
-def init_input(init):
-    """The ``--init`` value as an input file role, or None for ``density`` / ``uniform``."""
-    return None if init in INITS else ("--init file", init)
+def init_input(init, starts=INITS):
+    """The ``--init`` value as an input file role, or None for one of ``starts``; refused, naming both readings, where
+    it is neither a start nor an existing file (``--init stratifed`` said only that the file did not exist)."""
+    if init in starts:
+        return None
+    if str(init) != "-" and not os.path.exists(init):
+        raise StippleError(f"--init: {init!r} is neither a start ({', '.join(starts)}) nor an existing file")
+    return ("--init file", init)
 
 
 def parse_view(text, projection="ortho"):
