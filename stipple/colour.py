@@ -122,6 +122,12 @@ def separate(rgb, separation="cmyk", black=1.0):
     if not isinstance(separation, str):
         coverage = pen_coverages(rgb, separation)
         layers = [Layer(name, colour, coverage[..., k]) for k, (name, colour) in enumerate(separation)]
+        if np.any(1.0 - rgb > ROUNDING) and not any(layer.density.sum() > 0 for layer in layers):
+            names = ", ".join(name for name, _ in separation)
+            raise StippleError(
+                f"the inks {names} print none of the image's colours (each would darken a colour the image does "
+                "not have): there is nothing to place dots on"
+            )
         return _with_mass(layers)
     if separation not in SEPARATIONS:
         raise StippleError(f"separation must be one of {', '.join(SEPARATIONS)}, not {separation!r}")

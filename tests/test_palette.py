@@ -124,6 +124,16 @@ def test_a_white_image_is_blank_in_gray_too():
     assert separate(np.full((6, 8, 3), 0.5), "gray")[0].density == pytest.approx(np.full((6, 8), 0.5))
 
 
+def test_inks_that_print_none_of_the_colours_are_named_not_called_blank():
+    """A yellow image with a blue pen was called "blank (all white)"."""
+    yellow = np.zeros((6, 8, 3)) + [1.0, 1.0, 0.0]
+    with pytest.raises(StippleError, match="the inks blue print none of the image's colours"):
+        separate(yellow, parse_palette("blue"))
+    with pytest.raises(StippleError, match="blank"):
+        separate(np.ones((6, 8, 3)), parse_palette("blue"))
+    assert [layer.name for layer in separate(yellow, parse_palette("blue,#ffff00"))] == ["#ffff00"]
+
+
 @pytest.mark.parametrize("weight", [1e300, -1.0, float("nan")])
 def test_union_weight_out_of_range_is_refused(weight):
     from stipple.colour import colour_problem
