@@ -105,3 +105,9 @@ def test_float_tiffs_out_of_range_are_refused(folder, values, shown):
 def test_a_mistyped_start_names_the_starts_and_the_file(folder, args, starts):
     # It said only "cannot read stratifed: No such file or directory".
     refused(args, folder, f"--init: {args[-1]!r} is neither a start ({starts}")
+
+
+def test_an_output_that_is_a_folder_is_called_one(folder):
+    # It said "unknown output format (none)".
+    (folder / "results").mkdir()
+    refused(["torus", "in.png", *FAST, "-o", "results"], folder, "results: is a directory; name a file in it")

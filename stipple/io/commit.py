@@ -21,6 +21,9 @@ def output_format(path, allowed=FORMATS):
     if str(path) == "-":
         return ".csv"
     extension = os.path.splitext(str(path))[1].lower()
+    if extension not in allowed and os.path.isdir(path):  # "unknown output format (none)" for a folder
+        example = os.path.join(path, "dots" + allowed[0])
+        raise StippleError(f"{path}: is a directory; name a file in it, such as {example}")
     if extension not in allowed:
         what = "GeoJSON output is for sphere points" if extension in FORMATS else "unknown output format"
         found = "" if extension in FORMATS else f" {extension or '(none)'}"
