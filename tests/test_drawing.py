@@ -391,6 +391,11 @@ def test_a_png_less_than_a_pixel_high_is_refused_or_drawn_on_one_row():
         with pytest.raises(StippleError, match="less than one pixel high"):
             check_png_canvas((2000, 3), pixels_wide)
     check_png_canvas((2000, 3), 600)  # 0.9 pixels high: one row
+    # A canvas that no width fits is not told to use a smaller (or larger) --png-width (a hostile sweep).
+    for size in ((1, 2**31 - 1), (2**31 - 1, 1)):
+        with pytest.raises(StippleError, match="too narrow for any PNG .* use SVG"):
+            check_png_canvas(size, 16)
+    check_png_canvas((1, 60000), 1)  # 60000 pixels high, 1 wide: drawn
     line = render_line(np.array([[10.0, 1.0], [8990.0, 1.0]]), (9000, 2), 2048, 1.0, closed=False)
     assert line.size == (2048, 1)
     assert np.asarray(line).min() < 255

@@ -44,6 +44,11 @@ def check_png_canvas(size, pixels_wide, layers=2):
     """
     _, (columns, rows) = png_canvas(size, pixels_wide)
     picture = f"a PNG {pixels_wide} pixels wide of a {size[0]:g}×{size[1]:g} canvas"
+    if max(png_canvas(size, 1)[1][1], SUPERSAMPLE * size[0] / size[1]) > MAX_CANVAS_SIDE:  # no width would do
+        raise StippleError(
+            f"a {size[0]:g}×{size[1]:g} canvas is too narrow for any PNG (one side over "
+            f"{MAX_CANVAS_SIDE // SUPERSAMPLE} pixels where the other is one): use SVG"
+        )
     if max(columns, rows) > MAX_CANVAS_SIDE:
         raise StippleError(
             f"{picture} would be {columns // SUPERSAMPLE}×{rows // SUPERSAMPLE} pixels, more than "
