@@ -109,6 +109,13 @@ def test_circles_have_their_perimeter(tmp_path):
     assert layer.pen_down == pytest.approx(2 * np.pi * 9, rel=1e-4)
 
 
+def test_shapes_of_size_zero_draw_nothing(tmp_path):
+    body = '<g><circle cx="20" cy="20" r="0"/><ellipse cx="6" cy="2" rx="4" ry="0"/><rect width="0" height="5"/></g>'
+    body += '<path d="M 1,1 l 3e0-4E-0 h.5"/>'  # numbers run together: 1,1 then 3,-4, then 0.5
+    layer = plot_estimate(read_pen_layers(write(tmp_path, body))).layers[0]
+    assert layer.paths == 1 and layer.pen_down == pytest.approx(5.5)
+
+
 def profile_distance(total_time, speed, acceleration, samples=200001):
     """The distance covered in ``total_time`` by the trapezoidal speed profile v(t) = min(a t, v, a (T - t))."""
     t = np.linspace(0.0, total_time, samples)
@@ -154,6 +161,10 @@ def test_json_report_and_text(tmp_path):
         ("<html></html>", "not an SVG"),
         ('<svg xmlns="http://www.w3.org/2000/svg"><path d="10,10 L 20"/></svg>', "path data"),
         ('<svg xmlns="http://www.w3.org/2000/svg" width="wide" viewBox="0 0 1 1"/>', "length"),
+        # A hostile sweep: "nan" was read as an arc command "a", and a negative radius drew a circle.
+        ('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 1 1 L nan 50"/></svg>', "'nan' is neither a command"),
+        ('<svg xmlns="http://www.w3.org/2000/svg"><circle cx="5" cy="5" r="-1"/></svg>', "r='-1'> is negative"),
+        ('<svg xmlns="http://www.w3.org/2000/svg"><rect width="-3" height="2"/></svg>', "width='-3'> is negative"),
     ],
 )
 def test_bad_drawings_get_one_line(tmp_path, body, message):

@@ -196,6 +196,16 @@ def _number(element, name):
     return float(numbers[0])
 
 
+def _lengths(element, *names):
+    """The sizes ``names`` of a shape: a negative one is an error in SVG (drawn as a real circle before, a hostile
+    sweep); a zero one draws nothing (the caller's check)."""
+    values = [_number(element, name) for name in names]
+    for name, value in zip(names, values, strict=True):
+        if value < 0:
+            raise ValueError(f"<{_tag(element)} {name}={element.get(name)!r}> is negative (an error in SVG)")
+    return values
+
+
 def _element_paths(tag, element):
     """User-unit strokes of one shape element (complex vertex arrays)."""
     if tag == "path":
@@ -211,12 +221,16 @@ def _element_paths(tag, element):
         ]
         return [np.array(ends)]
     if tag == "rect":
-        x, y, w, h = (_number(element, name) for name in ("x", "y", "width", "height"))
+        x, y = _number(element, "x"), _number(element, "y")
+        w, h = _lengths(element, "width", "height")
+        if w == 0 or h == 0:
+            return []
         return [np.array([x + 1j * y, x + w + 1j * y, x + w + 1j * (y + h), x + 1j * (y + h), x + 1j * y])]
     if tag in ("circle", "ellipse"):
         cx, cy = _number(element, "cx"), _number(element, "cy")
-        rx = _number(element, "r") if tag == "circle" else _number(element, "rx")
-        ry = rx if tag == "circle" else _number(element, "ry")
+        rx, ry = _lengths(element, "r") * 2 if tag == "circle" else _lengths(element, "rx", "ry")
+        if rx == 0 or ry == 0:
+            return []
         angles = np.linspace(0.0, 2 * np.pi, ROUND_SEGMENTS + 1)
         return [cx + rx * np.cos(angles) + 1j * (cy + ry * np.sin(angles))]
     return []

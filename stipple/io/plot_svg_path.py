@@ -6,7 +6,9 @@ import numpy as np
 
 CURVE_SEGMENTS = 32
 ARGUMENTS = {"M": 2, "L": 2, "H": 1, "V": 1, "Z": 0, "C": 6, "S": 4, "Q": 4, "T": 2, "A": 7}
-TOKEN = re.compile(r"([MmLlHhVvZzCcSsQqTtAa])|([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
+# A command letter, a number, or anything else but separators (refused: "L nan 50" was read as L, an arc "a" and
+# 50, and refused for L's count of numbers, a hostile sweep).
+TOKEN = re.compile(r"([MmLlHhVvZzCcSsQqTtAa])|([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([^\s,]+)")
 
 
 def path_strokes(data):
@@ -60,7 +62,11 @@ def _commands(data):
             repeat = command if start == 0 or command.upper() != "M" else ("l" if command == "m" else "L")
             pairs.append((repeat, numbers[start : start + count]))
 
-    for letter, number in TOKEN.findall(data):
+    for match in TOKEN.finditer(data):
+        letter, number, other = match.groups()
+        if other:
+            near = data[max(match.start() - 12, 0) : match.end() + 12].strip()
+            raise ValueError(f"path data: {other[:20]!r} is neither a command nor a number (in {near[:60]!r})")
         if letter:
             if command is not None:
                 flush()
