@@ -111,3 +111,8 @@ def test_an_output_that_is_a_folder_is_called_one(folder):
     # It said "unknown output format (none)".
     (folder / "results").mkdir()
     refused(["torus", "in.png", *FAST, "-o", "results"], folder, "results: is a directory; name a file in it")
+
+
+def test_a_builtin_density_for_image_points_is_called_the_spheres(folder):
+    (folder / "p.csv").write_text("x,y\n1.5,2.5\n3.5,7.5\n9.5,4.5\n")
+    refused(["evaluate", "p.csv", "builtin:gaussians"], folder, "the built-in densities are the sphere's")

@@ -67,6 +67,11 @@ def evaluate_points(domain, points, input_source, bandwidth, kernel, options):
     if domain == "torus":
         if input_source is None:
             raise MissingInput("missing INPUT: the image or map the points were made from")
+        if str(input_source).startswith("builtin:"):  # it said "cannot read builtin:...: No such file"
+            raise StippleError(
+                f"{input_source}: the built-in densities are the sphere's; these are x,y points of an image (give "
+                "the image or map they were made from)"
+            )
         weights = load_input(input_source, **image_transfer(options))
         unit = np.mod(points / np.array([weights.shape[1], weights.shape[0]]), 1.0)
         problem = torus_problem(weights, len(points), bandwidth, **MEASURE_OPTIONS)
