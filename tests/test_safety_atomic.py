@@ -169,6 +169,22 @@ def test_a_closed_stdout_is_refused_before_the_run(folder):
     assert snapshot(folder) == before and leftovers(folder) == []
 
 
+@pytest.mark.parametrize("arguments", [["--help"], ["torus", "-h"], ["--version"]])
+def test_help_to_a_closed_stdout_is_an_error_not_silence(folder, arguments):
+    # It printed nothing and exited 0 (a hostile sweep).
+    result = subprocess.run(
+        [os.sys.executable, "-m", "stipple", *arguments],
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        close_fds=True,
+        preexec_fn=lambda: os.close(1),
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
+
+
 @pytest.fixture
 def small_filesystem(tmp_path):
     """A 64 KiB tmpfs (needs root and permission to mount; skipped otherwise)."""

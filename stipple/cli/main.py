@@ -38,9 +38,14 @@ class StippleGroup(click.Group):
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         reuse_freed_memory()
         open_standard_streams()
+        arguments = sys.argv[1:] if args is None else list(args)
+        if sys.stdout is None and {"--help", "-h", "--version"} & set(arguments):
+            # The help went nowhere with exit 0 (a hostile sweep); '-o -' is refused the same way.
+            _error_line("Error: cannot write to stdout: it is closed")
+            sys.exit(1)
         try:
             with SIGNALS:
-                check_thread_variables(sys.argv[1:] if args is None else args)
+                check_thread_variables(arguments)
                 code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except click.UsageError as error:
             hint = f" (see '{error.ctx.command_path} --help')" if error.ctx is not None else ""
