@@ -183,6 +183,17 @@ def test_render_names_a_field_that_is_not_a_number(tmp_path):
     assert result.exit_code == 1 and "malformed CSV row 3 (not a number): 'foo,3'" in result.output
 
 
+@pytest.mark.parametrize("cell", ["1_0", "\u0663", "0x10", "1e", "- 1"])
+def test_render_reads_only_decimal_numbers(tmp_path, cell):
+    """Python's float() read "1_0" as 10 and Arabic-Indic digits as ours (a hostile sweep)."""
+    points = tmp_path / "p.csv"
+    points.write_text(f"x,y\n1,2\n{cell},3\n", encoding="utf-8")
+    result = CliRunner().invoke(main, ["render", str(points), "-o", str(tmp_path / "a.png")])
+    assert result.exit_code == 1 and "malformed CSV row 3 (not a number)" in result.output
+    points.write_text("x,y\n1,2\n +1.5E+1 ,.5\n4.,-0\n")
+    assert CliRunner().invoke(main, ["render", str(points), "-o", str(tmp_path / "a.png")]).exit_code == 0
+
+
 def test_order_shortens_the_pen_path(torus_csv, tmp_path):
     image, _ = torus_csv
     arguments = ["torus", image, "-M", 300, "-N", 24, "--iterations", 10, "--init", "density", "--order"]

@@ -2,6 +2,7 @@
 value checked (``read_table``; ``stipple.pipelines.inputs`` makes them torus or sphere points)."""
 
 import io
+import re
 import shlex
 
 import numpy as np
@@ -27,6 +28,20 @@ def layered_csv_bytes(pixels, layer_names):
     lines = ["x,y,layer"]
     lines.extend(f"{x:.6f},{y:.6f},{name}" for (x, y), name in zip(pixels, layer_names, strict=True))
     return ("\n".join(lines) + "\n").encode()
+
+
+# A CSV cell's number: ASCII decimal notation (or nan / inf, refused after with their own message). Python's float()
+# also reads "1_0" as 10 and other scripts' digits (a hostile sweep).
+CSV_NUMBER = re.compile(
+    r"\s*[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|nan|inf|infinity)\s*", re.IGNORECASE | re.ASCII
+)
+
+
+def csv_number(cell):
+    """``float(cell)`` for a number written as ``CSV_NUMBER`` allows; ValueError otherwise."""
+    if not CSV_NUMBER.fullmatch(cell):
+        raise ValueError(f"not a number: {cell!r}")
+    return float(cell)
 
 
 def read_points_csv(source, names):
@@ -56,7 +71,7 @@ def read_points_csv(source, names):
                 f"{line[:80]!r}"
             )
         try:
-            rows.append([float(cells[i]) for i in indices])
+            rows.append([csv_number(cells[i]) for i in indices])
         except ValueError:
             raise StippleError(f"{name}: malformed CSV row {number} (not a number): {line[:80]!r}") from None
     points = np.array(rows, dtype=np.float64).reshape(-1, len(names))
