@@ -1,4 +1,4 @@
-"""A given start's dots at one place are parted before a run (``stipple.halftone.part_coincident``): each moved dot
+"""A given start's dots at one place are parted before a run (``stipple.sampling.part_coincident``): each moved dot
 lies at its sunflower distance from its place, every other dot stays bit for bit, and runs that could not part
 them (the sphere's designs, maps without the near field) now end with every dot apart, as good as from their own
 start; the manifolds' ``offset`` moves a point by the length asked in the direction asked."""
@@ -6,8 +6,9 @@ start; the manifolds' ``offset`` moves a point by the length asked in the direct
 import numpy as np
 import pytest
 
-from stipple.halftone import GOLDEN_ANGLE, PARTED_SPACING, part_coincident, run
+from stipple.halftone import run
 from stipple.manifolds import Rectangle, Sphere, Torus
+from stipple.sampling import GOLDEN_ANGLE, PARTED_SPACING, part_coincident
 from stipple.sphere import sphere_problem
 
 
