@@ -153,26 +153,9 @@ def test_a_full_stdout_leaves_the_files_untouched(folder):
     assert snapshot(folder) == before and leftovers(folder) == []
 
 
-def test_a_closed_stdout_is_refused_before_the_run(folder):
-    before = snapshot(folder)
-    result = subprocess.run(
-        [os.sys.executable, "-m", "stipple", "torus", "in.png", *FAST, "-o", "a.csv", "-o", "-"],
-        cwd=folder,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-        close_fds=True,
-        preexec_fn=lambda: os.close(1),
-    )
-    assert result.returncode == 1
-    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
-    assert snapshot(folder) == before and leftovers(folder) == []
-
-
-@pytest.mark.parametrize("arguments", [["--help"], ["torus", "-h"], ["--version"]])
-def test_help_to_a_closed_stdout_is_an_error_not_silence(folder, arguments):
-    # It printed nothing and exited 0 (a hostile sweep).
-    result = subprocess.run(
+def with_stdout_closed(arguments, folder):
+    """``stipple arguments`` as a process started without a standard output."""
+    return subprocess.run(
         [os.sys.executable, "-m", "stipple", *arguments],
         cwd=folder,
         stdout=subprocess.DEVNULL,
@@ -181,6 +164,20 @@ def test_help_to_a_closed_stdout_is_an_error_not_silence(folder, arguments):
         close_fds=True,
         preexec_fn=lambda: os.close(1),
     )
+
+
+def test_a_closed_stdout_is_refused_before_the_run(folder):
+    before = snapshot(folder)
+    result = with_stdout_closed(["torus", "in.png", *FAST, "-o", "a.csv", "-o", "-"], folder)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
+@pytest.mark.parametrize("arguments", [["--help"], ["torus", "-h"], ["--version"]])
+def test_help_to_a_closed_stdout_is_an_error_not_silence(folder, arguments):
+    # It printed nothing and exited 0 (a hostile sweep).
+    result = with_stdout_closed(arguments, folder)
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == ["Error: cannot write to stdout: it is closed"]
 
