@@ -835,3 +835,13 @@ def test_levels_on_npy_frames_is_refused_as_for_a_still_map(tmp_path):
         np.save(source / f"{index}.npy", np.mgrid[0:20, 0:30][1] / 29.0 + index)
     result = video(source, "-M", 60, "-N", 12, "--levels", "0.1,0.9", "-o", tmp_path / "d.csv")
     assert result.exit_code == 1 and "--levels is for images; a .npy map is stretched by --range" in result.output
+
+
+def test_a_broken_file_named_as_an_image_is_called_broken_and_a_good_one_an_image(tmp_path):
+    """An empty `x.png` given to video was "an image, not a video" by its name alone (a hostile sweep)."""
+    (tmp_path / "empty.png").write_bytes(b"")
+    (tmp_path / "text.png").write_text("not a picture\n")
+    Image.fromarray(np.full((8, 8), 90, np.uint8)).save(tmp_path / "gray.png")
+    for name, message in (("empty", "file is empty"), ("text", "cannot decode image"), ("gray", "an image, not")):
+        result = CliRunner().invoke(main, ["video", str(tmp_path / f"{name}.png"), "-o", str(tmp_path / "a.csv")])
+        assert result.exit_code == 1 and message in result.output, result.output

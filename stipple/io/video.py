@@ -146,6 +146,7 @@ def _open_video(source, selection):
     if not os.path.exists(source):
         raise StippleError(f"{source}: no such file, folder or matching frame images")
     if os.path.splitext(source)[1].lower() in FRAME_EXTENSIONS:
+        load_density(source)  # an empty or broken file is named as such (it was called "an image" by its name)
         raise StippleError(f"{source}: an image, not a video; use 'stipple torus', or give a folder or glob of frames")
     # A pipe waited for a writer for ever, and could not be read twice (the first frame, then the run).
     check_regular_file(source, "a pipe?", "; a video is read twice: save it to a file first")
