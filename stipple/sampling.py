@@ -94,7 +94,12 @@ def _points_in_cells(weights, rng, cells):
 # spacings at k golden angles (a sunflower around the place): dots on top of each other have the same gradient in
 # every objective, and no run parted them (a hostile sweep: 300 such dots ended as one on the sphere).
 PARTED_SPACING = 0.5
-GOLDEN_ANGLE = np.pi * (3 - np.sqrt(5))
+
+
+def golden_angles(indices):
+    """``indices`` times the golden angle ``pi (3 - sqrt 5)``: directions that never repeat and fill the circle
+    evenly (a sunflower's), for dots that must move apart from one place (``part_coincident``, the spread step)."""
+    return np.asarray(indices, dtype=float) * np.pi * (3 - np.sqrt(5))
 
 
 def part_coincident(manifold, points):
@@ -112,7 +117,7 @@ def part_coincident(manifold, points):
     rank = rank[rank > 0].astype(float)
     lengths = PARTED_SPACING * np.sqrt(manifold.area / len(points)) * np.sqrt(rank)
     points = points.copy()
-    points[moved] = manifold.offset(points[moved], lengths, GOLDEN_ANGLE * rank)
+    points[moved] = manifold.offset(points[moved], lengths, golden_angles(rank))
     return points, moved.size
 
 

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from .halftone import hexagonal_spacing
 from .manifolds import Sphere
-from .sampling import pixel_indices, pixel_positions
+from .sampling import golden_angles, pixel_indices, pixel_positions
 
 # A dot is spread when its nearest-neighbour distance is below this percentile of all dots' ratios to the
 # hexagonal spacing of the density in their pixels, and at least this fraction of its spacing (the portrait after
@@ -109,7 +109,7 @@ def spread_close_sphere(points, local_density, target=None, passes=SPREAD_PASSES
 def _directions(indices):
     """Unit vectors ``(cos a, sin a, 0)`` at golden-angle steps ``a`` of the dots' indices: the directions in which
     dots on top of another dot (distance 0, no direction away from it) move, a different one for each."""
-    angles = np.asarray(indices, dtype=float) * np.pi * (3 - np.sqrt(5))
+    angles = golden_angles(indices)
     return np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
 
 

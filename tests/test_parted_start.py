@@ -8,7 +8,7 @@ import pytest
 
 from stipple.halftone import run
 from stipple.manifolds import Rectangle, Sphere, Torus
-from stipple.sampling import GOLDEN_ANGLE, PARTED_SPACING, part_coincident
+from stipple.sampling import PARTED_SPACING, golden_angles, part_coincident
 from stipple.sphere import sphere_problem
 
 
@@ -72,7 +72,7 @@ def test_repeated_points_are_parted_on_their_sunflower_and_the_others_stay(manif
             torus_distance(moved, here, manifold.scale) if isinstance(manifold, Torus) else sphere_distance(moved, here)
         )
         assert np.allclose(distance, PARTED_SPACING * spacing * np.sqrt(rank))
-    assert np.isclose(GOLDEN_ANGLE, np.pi * (3 - np.sqrt(5)))
+    assert np.isclose(golden_angles(1), np.pi * (3 - np.sqrt(5)))
 
 
 def test_points_without_repeats_come_back_as_they_are():
