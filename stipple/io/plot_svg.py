@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import StippleError
 from .plot_svg_path import path_strokes
 from .sources import read_source
-from .units import UNITS
+from .units import DECIMAL, UNITS
 
 MAX_SVG_BYTES = 1 << 28
 ROUND_SEGMENTS = 256
@@ -29,7 +29,7 @@ MM_PER = {**UNITS, "pc": 25.4 / 6, "": UNITS["px"]}  # SVG lengths: the options'
 SVG = "{http://www.w3.org/2000/svg}"
 INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
 SKIPPED = {"defs", "metadata", "title", "desc", "style", "clipPath", "mask", "symbol", "marker", "pattern"}
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+NUMBER = DECIMAL
 
 
 @dataclass

@@ -4,11 +4,13 @@ import re
 
 import numpy as np
 
+from .units import DECIMAL
+
 CURVE_SEGMENTS = 32
 ARGUMENTS = {"M": 2, "L": 2, "H": 1, "V": 1, "Z": 0, "C": 6, "S": 4, "Q": 4, "T": 2, "A": 7}
 # A command letter, a number, or anything else but separators (refused: "L nan 50" was read as L, an arc "a" and
 # 50, and refused for L's count of numbers, a hostile sweep).
-TOKEN = re.compile(r"([MmLlHhVvZzCcSsQqTtAa])|([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([^\s,]+)")
+TOKEN = re.compile(rf"([MmLlHhVvZzCcSsQqTtAa])|({DECIMAL})|([^\s,]+)")
 
 
 def path_strokes(data):

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import StippleError
 from .sources import STDIN_NAME, read_source, source_or_stdin
+from .units import DECIMAL
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
@@ -32,9 +33,7 @@ def layered_csv_bytes(pixels, layer_names):
 
 # A CSV cell's number: ASCII decimal notation (or nan / inf, refused after with their own message). Python's float()
 # also reads "1_0" as 10 and other scripts' digits (a hostile sweep).
-CSV_NUMBER = re.compile(
-    r"\s*[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|nan|inf|infinity)\s*", re.IGNORECASE | re.ASCII
-)
+CSV_NUMBER = re.compile(rf"\s*(?:{DECIMAL}|[-+]?(?:nan|inf|infinity))\s*", re.IGNORECASE | re.ASCII)
 
 
 def csv_number(cell):

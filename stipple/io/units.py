@@ -9,6 +9,8 @@ from ..errors import StippleError
 UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
 MIN_LENGTH_MM = 1e-3
 MAX_LENGTH_MM = 1e6
+# A number in decimal notation, as SVG and CSV files write it: sign, digits with or without a point, exponent.
+DECIMAL = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 
 def parse_length(text, name="length"):
