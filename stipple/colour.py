@@ -122,13 +122,11 @@ def separate(rgb, separation="cmyk", black=1.0):
     if not isinstance(separation, str):
         coverage = pen_coverages(rgb, separation)
         layers = [Layer(name, colour, coverage[..., k]) for k, (name, colour) in enumerate(separation)]
-        if np.any(1.0 - rgb > ROUNDING) and not any(layer.density.sum() > 0 for layer in layers):
-            names = ", ".join(name for name, _ in separation)
-            raise StippleError(
-                f"the inks {names} print none of the image's colours (each would darken a colour the image does "
-                "not have): there is nothing to place dots on"
-            )
-        return _with_mass(layers)
+        if not np.any(1.0 - rgb > ROUNDING):
+            return _with_mass(layers)
+        names = ", ".join(name for name, _ in separation)
+        why = f"the inks {names} print none of the image's colours (each would darken a colour the image does not have)"
+        return _with_mass(layers, why)
     if separation not in SEPARATIONS:
         raise StippleError(f"separation must be one of {', '.join(SEPARATIONS)}, not {separation!r}")
     if not 0 <= black <= 1:
@@ -155,11 +153,11 @@ def print_target(rgb, separation):
     return rgb
 
 
-def _with_mass(layers):
-    """The layers that have ink; an error if none has."""
+def _with_mass(layers, nothing="the image is blank (all white)"):
+    """The layers that have ink; an error if none has, saying why (``nothing``)."""
     layers = [layer for layer in layers if layer.density.sum() > 0]
     if not layers:
-        raise StippleError("the image is blank (all white): there is nothing to place dots on")
+        raise StippleError(f"{nothing}: there is nothing to place dots on")
     return layers
 
 
