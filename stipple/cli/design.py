@@ -97,8 +97,8 @@ def design(ctx, **options):
             raise StippleError(f"error must be a number in (0, 1), not {options['error']!r}")
         settings = render_settings(options)
         view = parse_view(options["view"], options["projection"])
-        init_file = [role for role in [init_input(options["init"], STARTS)] if role is not None]
-        with guarded_files(init_file, options["outputs"], options["checkpoint"]):
+        inputs = [init_input(options["init"], STARTS)]
+        with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             epsilon = DESIGN_EPSILON if options["epsilon"] is None else options["epsilon"]
             problem = design_problem(
                 options["strength"], options["n_points"], threads=options["threads"], epsilon=epsilon

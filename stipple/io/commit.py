@@ -47,15 +47,21 @@ def check_writable(path):
         raise StippleError(f"{path}: is a directory")
     _check_regular(path)
     _check_name_length(path, directory)
-    if not os.stat(directory).st_mode & 0o222:  # refused by its mode, as a read-only file is, even for root
+    if read_only(directory):
         raise StippleError(f"{path}: not writable (the folder {directory} is read-only)")
-    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
+    if os.path.exists(path) and read_only(path):
         raise StippleError(f"{path}: is read-only; make it writable or choose another name")
     try:
         with tempfile.TemporaryFile(dir=directory):
             pass
     except OSError as error:
         raise StippleError(f"{path}: not writable ({error.strerror})") from None
+
+
+def read_only(path):
+    """Whether ``path`` is read-only by its mode: refused as an output or output folder even for root, who could
+    write it."""
+    return not os.stat(path).st_mode & 0o222
 
 
 def _check_name_length(path, directory):
@@ -85,7 +91,7 @@ def make_folder(directory):
         above = os.path.dirname(os.path.abspath(directory))
         while not os.path.exists(above):
             above = os.path.dirname(above)
-        if os.path.isdir(above) and not os.stat(above).st_mode & 0o222:
+        if os.path.isdir(above) and read_only(above):
             raise StippleError(f"{directory}: cannot make the output folder (the folder {above} is read-only)")
         try:
             os.makedirs(directory, exist_ok=True)
@@ -98,7 +104,7 @@ def check_folder(directory):
     """Raise, naming ``directory``, unless it is a folder that can take new files."""
     if not os.path.isdir(directory):
         raise StippleError(f"{directory}: is not a folder")
-    if not os.stat(directory).st_mode & 0o222:
+    if read_only(directory):
         raise StippleError(f"{directory}: the output folder is read-only; make it writable or choose another")
     try:
         with tempfile.TemporaryFile(dir=directory):
