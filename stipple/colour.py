@@ -168,6 +168,12 @@ def palette_inks(separation):
     return list(SEPARATION_INKS.get(separation, SEPARATION_INKS["cmyk"]))
 
 
+def palette_number(separation, name):
+    """Ink ``name``'s number in ``separation``'s palette, from 1: its SVG layer and vpype layer, kept free where
+    an ink gets no dots so that every pen keeps its slot."""
+    return palette_inks(separation).index(name) + 1
+
+
 def check_palette_extras(palette, black, union_weight=1.0):
     """Refuse ``--black`` and ``--union-weight`` where they would be ignored: without ``--palette`` (both),
     ``--black`` with a palette other than cmyk (the only one with a black ink for the grey component), and

@@ -15,7 +15,7 @@ import numpy as np
 import vpype as vp
 import vpype_cli
 
-from .colour import check_palette_extras, halftone_colour, palette_inks, parse_palette
+from .colour import check_palette_extras, halftone_colour, palette_number, parse_palette
 from .errors import StippleError
 from .halftone import check_count
 from .line import LINE_ITERATIONS
@@ -122,9 +122,9 @@ def stipple(document, image, n_points, width, pen_width, dot_radius, **options):
             click.echo(f"stipple: note: {left_out_note(left_out, f'{n_points} dots')}", err=True)
     except StippleError as error:
         raise click.ClickException(str(error)) from None
-    inks = palette_inks(parse_palette(options["separation"]))
+    separation = parse_palette(options["separation"])
     for name, colour, paths in drawn:
-        layer_id = plugin_layer_id(document, inks.index(name) + 1)
+        layer_id = plugin_layer_id(document, palette_number(separation, name))
         document.add(vp.LineCollection(paths), layer_id)
         layer = document.layers[layer_id]
         layer.set_property(vp.METADATA_FIELD_NAME, name)

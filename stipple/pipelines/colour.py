@@ -5,7 +5,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..colour import INK_COLOURS, check_layer_names, colour_problem, palette_inks, print_target, separate
+from ..colour import (
+    INK_COLOURS,
+    check_layer_names,
+    colour_problem,
+    palette_inks,
+    palette_number,
+    print_target,
+    separate,
+)
 from ..halftone import run
 from ..io.images import load_colour
 from ..io.png import check_png_outputs
@@ -97,7 +105,7 @@ def stipple_colour(image, formats, recipe, *, session=None, inspect=None, announ
         placed, travel = ordered_layers(placed, shape, recipe.draw["width"])
     tone = tone_settings([layer.density for layer in layers], rgb, settings["separation"])
     inks = palette_inks(settings["separation"])
-    numbers = [inks.index(name) + 1 for name, _, _ in placed]
+    numbers = [palette_number(settings["separation"], name) for name, _, _ in placed]
     files = layered_files(placed, shape, formats, recipe.draw, numbers, **tone)
     return ImageOutputs(files, result, travel, notes=missing_inks(inks, [name for name, _, _ in placed]))
 
