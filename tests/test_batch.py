@@ -332,7 +332,7 @@ def test_batch_neither_offers_nor_takes_an_automatic_count(tmp_path):
     help_text = CliRunner().invoke(main, ["batch", "--help"]).output
     assert "INTEGER|AUTO" not in help_text and "-M auto is for stipple torus" in " ".join(help_text.split())
     result = CliRunner().invoke(main, ["batch", str(tmp_path / "a.png"), "-d", str(tmp_path / "out"), "-M", "auto"])
-    assert result.exit_code == 2 and "'auto' is not a valid integer" in result.output
+    assert result.exit_code == 2 and "'auto' is not a whole number in decimal digits" in result.output
     assert not (tmp_path / "out").exists()
 
 

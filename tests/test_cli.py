@@ -287,3 +287,38 @@ def test_the_peak_note_counts_a_pens_clipping_of_the_density(tmp_path):
         assert result.exit_code == 0, result.output
         quoted.append(int(re.search(r"rises from \d+ to (\d+)", result.output).group(1)))
     assert quoted[1] < 0.7 * quoted[0], quoted  # 328 and 178; both 328 before
+
+
+@pytest.mark.parametrize(
+    "args, option, text",
+    [
+        (["-M", "3_00"], "-M", "'3_00' is not a whole number in decimal digits or 'auto'"),
+        (["-M", "\u0663\u0660\u0660"], "-M", "is not a whole number in decimal digits or 'auto'"),
+        (["--seed", "\uff10"], "--seed", "is not a whole number in decimal digits"),
+        (["--iterations", "1e3"], "--iterations", "'1e3' is not a whole number in decimal digits"),
+        (["--gamma", "1_0"], "--gamma", "'1_0' is not a decimal number"),
+        (["--range", "0", "1_0"], "--range", "'1_0' is not a decimal number"),
+        (["--settle", "\u0661e-3"], "--settle", "is not a decimal number"),
+    ],
+)
+def test_options_take_only_decimal_numbers(image_path, tmp_path, args, option, text):
+    """click's int() and float() read "3_00" as 300 and other scripts' digits as ours (a hostile sweep)."""
+    result = run(["torus", image_path, "-o", tmp_path / "o.csv", *args])
+    assert result.exit_code == 2 and option in result.output and text in result.output
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_decimal_options_keep_signs_spaces_exponents_and_named_nan(image_path, tmp_path):
+    args = ["torus", image_path, "-o", tmp_path / "o.csv", "-N", " 24 ", "--iterations", "+3", "--tol", "1E-3"]
+    assert run(args + ["-M", " 150", "--gamma", ".5"]).exit_code == 0
+    result = run(args + ["-M", "150", "--gamma", "NaN"])
+    assert result.exit_code == 1 and "gamma must be a positive number, not nan" in result.output
+
+
+def test_evaluate_and_design_options_take_only_decimal_numbers(image_path, tmp_path):
+    points = tmp_path / "p.csv"
+    points.write_text("x,y\n1,2\n3,4\n")
+    result = run(["evaluate", points, image_path, "-N", "2_4"])
+    assert result.exit_code == 2 and "'2_4' is not a whole number in decimal digits" in result.output
+    result = run(["design", "-t", "\u0664", "-o", tmp_path / "d.csv"])
+    assert result.exit_code == 2 and "is not a whole number in decimal digits" in result.output

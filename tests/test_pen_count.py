@@ -209,7 +209,7 @@ def test_colour_in_the_plotter_style_says_which_tones_it_cannot_reach(tmp_path):
     [
         ([], "pen dot style"),
         (["--dot-style", "point", "--palette", "cmyk"], "one ink"),
-        (["--dot-style", "point", "-M", "many"], "neither a whole number nor 'auto'"),
+        (["--dot-style", "point", "-M", "many"], "'many' is not a whole number in decimal digits or 'auto'"),
     ],
 )
 def test_auto_refusals_on_the_command_line(tmp_path, extra, message):

@@ -12,6 +12,7 @@ from ..io.commit import check_writable, make_folder
 from .defaults import INITS
 from .recipes import torus_recipe
 from .torus import torus
+from .values import Integer
 
 # Options of ``stipple torus`` that name one image's files or its checkpoint, or its inks: not a batch's.
 NOT_BATCH = {
@@ -41,7 +42,7 @@ def torus_params():
     for param in params:
         param.help = BATCH_HELP.get(param.name, param.help)
         if param.name == "n_points":
-            param.type = click.INT
+            param.type = Integer()
     return params
 
 

@@ -19,7 +19,7 @@ from .options import (
     without,
 )
 from .supervise import finish, guarded_files, solve, write_outputs
-from .values import checked_count
+from .values import Integer, Number, checked_count
 
 # The exit code of a run that ended without reaching --error (its points are written).
 NOT_A_DESIGN = 3
@@ -29,20 +29,20 @@ def design_options(function):
     own = [
         config_option(),
         click.option(
-            "-t", "--strength", type=int, required=True, help="Degree t: integrate every harmonic of degree <= t."
+            "-t", "--strength", type=Integer(), required=True, help="Degree t: integrate every harmonic of degree <= t."
         ),
         click.option(
             "-M",
             "--points",
             "n_points",
-            type=int,
+            type=Integer(),
             default=None,
             callback=checked_count,
             help="Number of points (default: ceil(0.55 (t+1)^2); (t+1)^2 converges in about 50 iterations).",
         ),
         click.option(
             "--error",
-            type=float,
+            type=Number(),
             default=1e-10,
             show_default=True,
             help="Stop when every harmonic's quadrature error is at most this.",

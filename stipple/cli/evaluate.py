@@ -12,19 +12,21 @@ from ..io.sources import PICTURE_EXTENSIONS
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED, MAX_POINTS
 from .options import check_extension, check_longitude, click_error, given_on_command_line, parse_levels, warn_outside
 from .supervise import guarded_files
-from .values import FiniteFloatRange
+from .values import FiniteFloatRange, Integer, IntegerRange, Number
 
 
 @click.command()
 @click.argument("points_source", metavar="POINTS")
 @click.argument("input_source", metavar="INPUT", required=False)
-@click.option("-N", "--bandwidth", type=int, default=None, help="Bandwidth of E_N (default: as stipple would use).")
+@click.option(
+    "-N", "--bandwidth", type=Integer(), default=None, help="Bandwidth of E_N (default: as stipple would use)."
+)
 @click.option("--uniform", is_flag=True, help="Sphere: against w ≡ 1 (no INPUT).")
 @click.option("--kernel", default="distance", show_default=True, help="Sphere kernel of E_N.")
-@click.option("--lon0", type=float, default=0.0, show_default=True, help="Sphere maps: first column's longitude.")
+@click.option("--lon0", type=Number(), default=0.0, show_default=True, help="Sphere maps: first column's longitude.")
 @click.option("--invert", is_flag=True, help="As for the run.")
-@click.option("--gamma", type=float, default=1.0, show_default=True, help="As for the run.")
-@click.option("--range", "value_range", type=(float, float), default=None, help="As for the run.")
+@click.option("--gamma", type=Number(), default=1.0, show_default=True, help="As for the run.")
+@click.option("--range", "value_range", type=(Number(), Number()), default=None, help="As for the run.")
 @click.option(
     "--palette",
     default="cmyk",
@@ -50,21 +52,24 @@ from .values import FiniteFloatRange
     help="Pictures: CIELAB or luminance measures (default: CIELAB when INPUT has colour).",
 )
 @click.option("--levels", default=None, help="As for the run (auto or BLACK,WHITE).")
-@click.option("--inset", type=float, default=0.0, show_default=True, help="Pictures: undo a drawing's inset (px).")
+@click.option("--inset", type=Number(), default=0.0, show_default=True, help="Pictures: undo a drawing's inset (px).")
 @click.option(
     "--floyd-steinberg",
     "fs_dots",
-    type=click.IntRange(min=1, max=MAX_POINTS),
+    type=IntegerRange(min=1, max=MAX_POINTS),
     default=None,
     help="Pictures: also measure Floyd-Steinberg error diffusion with about this many dots.",
 )
-@click.option("--speed", type=float, default=DEFAULT_SPEED, show_default=True, help="Drawings: pen-down mm/s.")
+@click.option("--speed", type=Number(), default=DEFAULT_SPEED, show_default=True, help="Drawings: pen-down mm/s.")
 @click.option(
-    "--travel-speed", type=float, default=DEFAULT_TRAVEL_SPEED, show_default=True, help="Drawings: pen-up mm/s."
+    "--travel-speed", type=Number(), default=DEFAULT_TRAVEL_SPEED, show_default=True, help="Drawings: pen-up mm/s."
 )
-@click.option("--lift", type=float, default=DEFAULT_LIFT, show_default=True, help="Drawings: seconds per pen lift.")
+@click.option("--lift", type=Number(), default=DEFAULT_LIFT, show_default=True, help="Drawings: seconds per pen lift.")
 @click.option(
-    "--acceleration", type=float, default=None, help="Drawings: mm/s² of every move from rest to rest (default: none)."
+    "--acceleration",
+    type=Number(),
+    default=None,
+    help="Drawings: mm/s² of every move from rest to rest (default: none).",
 )
 def evaluate(
     points_source,

@@ -8,6 +8,7 @@ from ..errors import StippleError
 from .defaults import LINE_ITERATIONS
 from .options import common_options, resolve_input, without
 from .supervise import finish, guarded_files, supervised, write_outputs
+from .values import Number
 
 # How the line's settings are spelt in messages: the options typed.
 OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
@@ -27,7 +28,7 @@ OPTION_NAMES = {"length": "--length", "bandwidth": "-N/--bandwidth"}
 @common_options(iterations=LINE_ITERATIONS, settle=False, phased=True)
 @click.option(
     "--length",
-    type=float,
+    type=Number(),
     default=None,
     help="Curve length in pixels (default: c sqrt(M W H), c 0.6-1.1 from M/(W H); docs/line.md).",
 )

@@ -9,7 +9,7 @@ from ..errors import MissingInput, StippleError
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
-from .values import FiniteFloatRange, checked_count, some_output
+from .values import FiniteFloatRange, Integer, IntegerRange, Number, checked_count, some_output
 
 
 def click_error(error):
@@ -54,7 +54,7 @@ def run_options(iterations=2000, iterations_help="Maximum total number of CG ite
     return [
         click.option(
             "--iterations",
-            type=click.IntRange(min=0),
+            type=IntegerRange(min=0),
             default=iterations,
             show_default=True,
             help=iterations_help,
@@ -65,14 +65,14 @@ def run_options(iterations=2000, iterations_help="Maximum total number of CG ite
             default=None,
             help="Stop optimising after this many seconds (reading the input, the set-up and the outputs come on top).",
         ),
-        click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random start."),
+        click.option("--seed", type=Integer(), default=0, show_default=True, help="Seed of the random start."),
         click.option(
             "--threads",
-            type=int,
+            type=Integer(),
             default=None,
             help="Transform threads (default: all CPUs; the same thread count gives the same points).",
         ),
-        click.option("--epsilon", type=float, default=None, help="Requested accuracy of the transforms."),
+        click.option("--epsilon", type=Number(), default=None, help="Requested accuracy of the transforms."),
         click.option(
             "--beta",
             type=click.Choice(BETAS),
@@ -99,7 +99,7 @@ def output_options():
         ),
         click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, pt, px)."),
         click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm (default: keeps the tone)."),
-        click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels."),
+        click.option("--png-width", type=IntegerRange(min=16, max=32768), default=None, help="PNG width in pixels."),
         click.option(
             "--order",
             type=click.Choice(ORDERS),
@@ -140,18 +140,16 @@ def apply_options(function, options):
     return function
 
 
-class CountOrAuto(click.types.IntParamType):
+class CountOrAuto(Integer):
     """``-M``: a whole number, or ``auto`` (the count from the pen: ``stipple.render.pen_count``)."""
 
     name = "integer|auto"
+    words = "a whole number in decimal digits or 'auto'"
 
     def convert(self, value, param, ctx):
-        if isinstance(value, int) or str(value).strip().lower() == "auto":
-            return value if isinstance(value, int) else "auto"
-        try:
-            return int(value)
-        except ValueError:
-            self.fail(f"{value!r} is neither a whole number nor 'auto'", param, ctx)
+        if isinstance(value, str) and value.strip().lower() == "auto":
+            return "auto"
+        return super().convert(value, param, ctx)
 
 
 def common_options(function=None, *, iterations=2000, settle=True, auto_count=False, phased=False):
@@ -173,16 +171,18 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
             "-M",
             "--points",
             "n_points",
-            type=CountOrAuto() if auto_count else int,
+            type=CountOrAuto() if auto_count else Integer(),
             callback=checked_count,
             default=30000,
             show_default=True,
             help=count_help,
         ),
-        click.option("-N", "--bandwidth", type=int, default=None, help="Kernel bandwidth (default: from M; README)."),
+        click.option(
+            "-N", "--bandwidth", type=Integer(), default=None, help="Kernel bandwidth (default: from M; README)."
+        ),
         click.option(
             "--tol",
-            type=float,
+            type=Number(),
             default=1e-4,
             show_default=True,
             help="Stop when the gradient norm falls to this fraction of the initial one (for the torus's stratified "
@@ -201,11 +201,11 @@ def common_options(function=None, *, iterations=2000, settle=True, auto_count=Fa
             is_flag=True,
             help="Dots on the light parts (images: w = u; maps: w = 1 - map), drawn white on black.",
         ),
-        click.option("--gamma", type=float, default=1.0, show_default=True, help="Use w**gamma."),
+        click.option("--gamma", type=Number(), default=1.0, show_default=True, help="Use w**gamma."),
         click.option(
             "--range",
             "value_range",
-            type=(float, float),
+            type=(Number(), Number()),
             default=None,
             help="For .npy maps: the values sent to 0 and 1 (default: min and max).",
         ),
@@ -296,7 +296,7 @@ def palette_options(default):
             ),
             click.option(
                 "--union-weight",
-                type=float,
+                type=Number(),
                 default=1.0,
                 show_default=True,
                 help="Weight of the all-dots term against each ink's own (0: inks optimised apart).",

@@ -7,7 +7,7 @@ from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
 from .options import look_options, parse_levels, parse_view, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
-from .values import FiniteFloatRange, some_output
+from .values import FiniteFloatRange, IntegerRange, Number, some_output
 
 
 @click.command()
@@ -30,7 +30,7 @@ from .values import FiniteFloatRange, some_output
 @click.option("--size", default=None, help="Torus: WIDTH,HEIGHT of the input in pixels (default: from the points).")
 @click.option("--width", default="200mm", show_default=True, help="SVG width (mm, cm, in, pt, px).")
 @click.option("--dot-radius", default=None, help="Dot radius in SVG/PNG, e.g. 0.3mm.")
-@click.option("--png-width", type=click.IntRange(min=16, max=32768), default=None, help="PNG width in pixels.")
+@click.option("--png-width", type=IntegerRange(min=16, max=32768), default=None, help="PNG width in pixels.")
 @click.option("--order", is_flag=True, help="Order the dots along a short pen path (pen plotters).")
 @click.option(
     "--coords", type=click.Choice(["lonlat", "xyz"]), default="lonlat", show_default=True, help="Sphere CSV columns."
@@ -45,10 +45,14 @@ from .values import FiniteFloatRange, some_output
     help="Centre LON,LAT of the globe view (equirect: the map's centre longitude).",
 )
 @click.option("--invert", is_flag=True, help="Draw white dots on black.")
-@click.option("--gamma", type=float, default=None, help="One ink's points with --like: the run's --gamma.")
+@click.option("--gamma", type=Number(), default=None, help="One ink's points with --like: the run's --gamma.")
 @click.option("--levels", default=None, help="One ink's points with --like: the run's --levels (auto or BLACK,WHITE).")
 @click.option(
-    "--range", "value_range", type=(float, float), default=None, help="One ink's points with --like: the run's --range."
+    "--range",
+    "value_range",
+    type=(Number(), Number()),
+    default=None,
+    help="One ink's points with --like: the run's --range.",
 )
 @click.option(
     "--palette",

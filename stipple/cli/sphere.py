@@ -19,6 +19,7 @@ from .options import (
 )
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 from .torus import peak_note
+from .values import Number
 
 
 @click.command()
@@ -27,7 +28,7 @@ from .torus import peak_note
 @click.option("--uniform", is_flag=True, help="w ≡ 1 (numerical spherical designs); no MAP.")
 @click.option(
     "--lon0",
-    type=float,
+    type=Number(),
     default=0.0,
     show_default=True,
     help="Longitude (degrees east) where the map's first column starts (-180 for maps centred on 0°).",

@@ -4,10 +4,42 @@ import math
 
 import click
 
+from ..io.units import INTEGER, NUMBER
 from .defaults import MAX_POINTS
 
 
-class FiniteFloatRange(click.FloatRange):
+class DecimalText:
+    """Refuses an option's text that Python's ``int()`` and ``float()`` read beyond ASCII decimal notation
+    (``-M 3_00`` as 300, other scripts' digits: a hostile sweep); values from config files are numbers already."""
+
+    text = NUMBER
+    words = "a decimal number"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not self.text.fullmatch(value):
+            self.fail(f"{value!r} is not {self.words}.", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class Number(DecimalText, click.types.FloatParamType):
+    """A float option's value, written in decimal notation."""
+
+
+class Integer(DecimalText, click.types.IntParamType):
+    """An integer option's value, written in decimal digits."""
+
+    text = INTEGER
+    words = "a whole number in decimal digits"
+
+
+class IntegerRange(DecimalText, click.IntRange):
+    """``click.IntRange`` of an option written in decimal digits."""
+
+    text = INTEGER
+    words = Integer.words
+
+
+class FiniteFloatRange(DecimalText, click.FloatRange):
     """``click.FloatRange`` that also refuses nan and the infinities (its range check lets nan through)."""
 
     def convert(self, value, param, ctx):

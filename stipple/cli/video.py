@@ -21,7 +21,7 @@ from .options import (
 )
 from .supervise import SIGNALS, Progress, checkpoint_interval, guarded_files
 from .torus import tone_hints
-from .values import FiniteFloatRange
+from .values import FiniteFloatRange, IntegerRange
 
 DEFAULT_FPS = 24.0
 MIN_FPS, MAX_FPS = 0.01, 1000.0
@@ -50,7 +50,7 @@ MIN_FPS, MAX_FPS = 0.01, 1000.0
 )
 @click.option(
     "--frame-iterations",
-    type=click.IntRange(min=0),
+    type=IntegerRange(min=0),
     default=FRAME_ITERATIONS,
     show_default=True,
     help="CG iterations of every frame after the first (each starts from the previous frame's dots), before its "
@@ -62,9 +62,9 @@ MIN_FPS, MAX_FPS = 0.01, 1000.0
     default=None,
     help=f"MP4 frame rate (default: the video's, or {DEFAULT_FPS:g} for images, over --step: the same duration).",
 )
-@click.option("--start", type=click.IntRange(min=0), default=0, show_default=True, help="First frame (from 0).")
-@click.option("--stop", type=click.IntRange(min=1), default=None, help="Stop before this frame (default: the end).")
-@click.option("--step", type=click.IntRange(min=1), default=1, show_default=True, help="Take every STEP-th frame.")
+@click.option("--start", type=IntegerRange(min=0), default=0, show_default=True, help="First frame (from 0).")
+@click.option("--stop", type=IntegerRange(min=1), default=None, help="Stop before this frame (default: the end).")
+@click.option("--step", type=IntegerRange(min=1), default=1, show_default=True, help="Take every STEP-th frame.")
 @click.option(
     "--levels",
     default=None,

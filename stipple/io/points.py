@@ -2,14 +2,13 @@
 value checked (``read_table``; ``stipple.pipelines.inputs`` makes them torus or sphere points)."""
 
 import io
-import re
 import shlex
 
 import numpy as np
 
 from ..errors import StippleError
 from .sources import STDIN_NAME, read_source, source_or_stdin
-from .units import DECIMAL
+from .units import parse_number
 
 MAX_PIXEL_COORDINATE = 2**31
 LABEL_COLUMNS = ("layer", "color", "colour")
@@ -29,18 +28,6 @@ def layered_csv_bytes(pixels, layer_names):
     lines = ["x,y,layer"]
     lines.extend(f"{x:.6f},{y:.6f},{name}" for (x, y), name in zip(pixels, layer_names, strict=True))
     return ("\n".join(lines) + "\n").encode()
-
-
-# A CSV cell's number: ASCII decimal notation (or nan / inf, refused after with their own message). Python's float()
-# also reads "1_0" as 10 and other scripts' digits (a hostile sweep).
-CSV_NUMBER = re.compile(rf"\s*(?:{DECIMAL}|[-+]?(?:nan|inf|infinity))\s*", re.IGNORECASE | re.ASCII)
-
-
-def csv_number(cell):
-    """``float(cell)`` for a number written as ``CSV_NUMBER`` allows; ValueError otherwise."""
-    if not CSV_NUMBER.fullmatch(cell):
-        raise ValueError(f"not a number: {cell!r}")
-    return float(cell)
 
 
 def read_points_csv(source, names):
@@ -70,7 +57,7 @@ def read_points_csv(source, names):
                 f"{line[:80]!r}"
             )
         try:
-            rows.append([csv_number(cells[i]) for i in indices])
+            rows.append([parse_number(cells[i]) for i in indices])
         except ValueError:
             raise StippleError(f"{name}: malformed CSV row {number} (not a number): {line[:80]!r}") from None
     points = np.array(rows, dtype=np.float64).reshape(-1, len(names))

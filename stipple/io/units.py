@@ -9,8 +9,19 @@ from ..errors import StippleError
 UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
 MIN_LENGTH_MM = 1e-3
 MAX_LENGTH_MM = 1e6
-# A number in decimal notation, as SVG and CSV files write it: sign, digits with or without a point, exponent.
-DECIMAL = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+# A number in decimal notation, as SVG and CSV files write it: sign, ASCII digits with or without a point, exponent.
+DECIMAL = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+# A number given as text (a CSV cell, an option's value): decimal, or nan / inf, which the range checks after
+# name. Python's float() and int() also read "1_0" as 10 and other scripts' digits (hostile sweeps).
+NUMBER = re.compile(rf"\s*(?:{DECIMAL}|[-+]?(?:nan|inf|infinity))\s*", re.IGNORECASE)
+INTEGER = re.compile(r"\s*[-+]?[0-9]+\s*")
+
+
+def parse_number(text):
+    """``float(text)`` for a number written as ``NUMBER`` allows; ValueError otherwise."""
+    if not NUMBER.fullmatch(text):
+        raise ValueError(f"not a number: {text!r}")
+    return float(text)
 
 
 def parse_length(text, name="length"):
