@@ -315,6 +315,13 @@ def test_decimal_options_keep_signs_spaces_exponents_and_named_nan(image_path, t
     assert result.exit_code == 1 and "gamma must be a positive number, not nan" in result.output
 
 
+def test_pairs_of_numbers_take_only_decimal_numbers(image_path, tmp_path):
+    result = run(["torus", image_path, "-M", 100, "-o", tmp_path / "o.csv", "--levels", "0.1,0_9"])
+    assert result.exit_code == 1 and "--levels must be 'auto' or BLACK,WHITE" in result.output
+    result = run(["sphere", "--uniform", "-M", 100, "-o", tmp_path / "o.png", "--view", "1_0,0"])
+    assert result.exit_code == 1 and "view must be LON,LAT in degrees, not '1_0,0'" in result.output
+
+
 def test_evaluate_and_design_options_take_only_decimal_numbers(image_path, tmp_path):
     points = tmp_path / "p.csv"
     points.write_text("x,y\n1,2\n3,4\n")

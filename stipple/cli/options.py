@@ -6,6 +6,7 @@ import os
 import click
 
 from ..errors import MissingInput, StippleError
+from ..io.units import parse_number
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
 from .defaults import BACKENDS, BETAS, DEFAULT_SETTLE, INITS, ORDERS, SETTLE_WINDOW
@@ -340,7 +341,7 @@ def parse_levels(text):
     if text is None or text == "auto":
         return text
     try:
-        black, white = (float(part) for part in text.split(","))
+        black, white = (parse_number(part) for part in text.split(","))
     except ValueError:
         raise StippleError(f"--levels must be 'auto' or BLACK,WHITE (two numbers in [0, 1]), not {text!r}") from None
     return black, white
@@ -387,7 +388,7 @@ def parse_view(text, projection="ortho"):
     """``--view LON,LAT`` in degrees; the equirectangular map is centred on a longitude only (a latitude there
     was silently ignored)."""
     try:
-        lon, lat = (float(part) for part in text.split(","))
+        lon, lat = (parse_number(part) for part in text.split(","))
     except ValueError:
         raise StippleError(f"view must be LON,LAT in degrees, not {text!r}") from None
     if not (-90 <= lat <= 90 and math.isfinite(lon)):
