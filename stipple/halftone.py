@@ -103,24 +103,6 @@ def hexagonal_spacing(n_points, area):
     return np.sqrt(2 * area / (np.sqrt(3) * n_points))
 
 
-def darkest_level(values, areas=None, mass_fraction=0.01):
-    """The density level above which ``mass_fraction`` of the mass lies (blind to a few dark pixels that hold
-    little mass, unlike the maximum), and the mean density: ``(level, mean)``."""
-    values = np.ravel(values).astype(float)
-    areas = np.ones_like(values) if areas is None else np.ravel(areas)
-    order = np.argsort(values)[::-1]
-    mass = np.cumsum(values[order] * areas[order])
-    level = values[order][min(np.searchsorted(mass, mass_fraction * mass[-1]), len(values) - 1)]
-    return float(level), mass[-1] / areas.sum()
-
-
-def peak_ratio(values, areas=None, mass_fraction=0.01):
-    """How much denser than average the densest ``mass_fraction`` of the density is: ``darkest_level`` over the
-    mean density, 1 for a constant density, about the peak-to-mean ratio for a bump."""
-    level, mean = darkest_level(values, areas, mass_fraction)
-    return float(max(level / mean, 1.0))
-
-
 def check_memory(needed, what):
     """Refuse a problem whose estimated working memory exceeds what the machine has available."""
     available = allocator.available_memory()

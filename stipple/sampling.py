@@ -70,10 +70,54 @@ def stratified_cells(weights, rng, count):
     (``stratified_sample``; the sphere's maps place their points in the cells themselves)."""
     rows, columns = weights.shape
     order = max(1, int(np.ceil(np.log2(max(rows, columns)))))
+    fractions = (np.arange(count) + rng.random(count)) / count
+    level = int(np.log2(weights.size / count) // 4)  # blocks of 4^level pixels, about sqrt(pixels / count)
+    if level >= MIN_BLOCK_LEVEL:
+        return _cells_through_blocks(weights, order, level, fractions)
     row, column = np.divmod(np.arange(weights.size), columns)
     along_curve = np.argsort(hilbert_index(column, row, order), kind="stable")
-    fractions = (np.arange(count) + rng.random(count)) / count
     return _cells_at(weights, along_curve, fractions)
+
+
+# ``stratified_cells`` goes through blocks of 2^level x 2^level cells where the image has 16^level cells or more
+# per point, level >= MIN_BLOCK_LEVEL (a 12-megapixel photo's 7500 coarse dots: 4.6 s through every pixel).
+MIN_BLOCK_LEVEL = 2
+
+
+def _cells_through_blocks(weights, order, level, fractions):
+    """``stratified_cells``'s cells found in two steps, the same cells up to rounding: the Hilbert curve visits
+    each aligned block of ``2^level x 2^level`` cells in one stretch, in the order of the blocks' own curve, so the
+    fractions are found among the blocks' masses first, then among the cells of each block found."""
+    rows, columns = weights.shape
+    side = 1 << level
+    padded = np.zeros((-(-rows // side) * side, -(-columns // side) * side))
+    padded[:rows, :columns] = weights
+    blocks = padded.reshape(padded.shape[0] // side, side, padded.shape[1] // side, side).sum(axis=(1, 3))
+    block_row, block_column = np.divmod(np.arange(blocks.size), blocks.shape[1])
+    along_curve = np.argsort(hilbert_index(block_column, block_row, order - level), kind="stable")
+    cumulative = np.cumsum(blocks.ravel()[along_curve])
+    targets = fractions * cumulative[-1]
+    found = np.minimum(np.searchsorted(cumulative, targets, side="right"), blocks.size - 1)
+    before = np.where(found > 0, cumulative[found - 1], 0.0)
+    block_row, block_column = np.divmod(along_curve[found], blocks.shape[1])
+    offset_row, offset_column = np.divmod(np.arange(side * side), side)
+    row = block_row[:, None] * side + offset_row[None, :]
+    column = block_column[:, None] * side + offset_column[None, :]
+    inside = (row < rows) & (column < columns)
+    row, column = np.where(inside, row, 0), np.where(inside, column, 0)
+    masses = np.where(inside, weights[row, column], 0.0)
+    within = np.argsort(hilbert_index(column.ravel(), row.ravel(), order).reshape(row.shape), axis=1, kind="stable")
+    masses = np.take_along_axis(masses, within, axis=1)
+    running = np.cumsum(masses, axis=1)
+    # The first cell whose running mass passes the target's remainder; the block's last inked cell where rounding
+    # left the remainder at or above the block's mass.
+    last_inked = side * side - 1 - np.argmax(masses[:, ::-1] > 0, axis=1)
+    pick = np.minimum(np.sum(running <= (targets - before)[:, None], axis=1), last_inked)
+    picked = np.take_along_axis(within, pick[:, None], axis=1)[:, 0]
+    return (
+        np.take_along_axis(row, picked[:, None], axis=1)[:, 0] * columns
+        + np.take_along_axis(column, picked[:, None], axis=1)[:, 0]
+    )
 
 
 def _cells_at(weights, cell_order, fractions):

@@ -18,7 +18,6 @@ from .halftone import (
     check_threads,
     default_threads,
     hexagonal_spacing,
-    peak_ratio,
     run,
 )
 from .io.images import given_transfer, load_density, load_input
@@ -27,6 +26,7 @@ from .manifolds import ScaledSphere, Sphere
 from .multilevel import split_sphere_points
 from .nearfield import NearField, SpherePairs
 from .objective import Discrepancy, SumObjective
+from .peaks import peak_ratio
 from .sphere_density import (
     AnalyticDensity,
     CellMap,

@@ -20,7 +20,6 @@ from .halftone import (
     default_threads,
     even_at_least_2,
     hexagonal_spacing,
-    peak_ratio,
     run,
 )
 from .io.images import check_grid, load_density
@@ -29,6 +28,7 @@ from .multilevel import split_points
 from .nearfield import NearField, TorusPairs
 from .nufft import BACKENDS, make_nufft
 from .objective import Discrepancy, SumObjective
+from .peaks import peak_ratio
 from .sampling import sample_image, stratified_sample
 from .spread import spread_close
 from .torus_spectrum import NEAR_FIELD_REACH, axis_bandwidths, image_coefficients, torus_kernels, torus_scale

@@ -118,3 +118,22 @@ def numbers(value):
     if isinstance(value, (list, tuple)):
         return [number for item in value for number in numbers(item)]
     return [float(value)] if isinstance(value, (int, float, np.number)) else []
+
+
+@pytest.mark.parametrize("mode", ["RGBA", "RGB", "LA", "P", "CMYK"])
+def test_colour_images_gray_is_the_exact_luma_composited_on_white(tmp_path, mode, rng):
+    """The gray of a colour image, in 32-bit integers a channel at a time, against the exact rational
+    ``(luma alpha + 255000 (255 - alpha)) / (255000 * 255)`` computed in 64-bit integers."""
+    from stipple.io.images import LUMA_PER_MILLE, load_gray
+
+    pixels = rng.integers(0, 256, (37, 53, 4), dtype=np.uint8)
+    pixels[0, :4] = [[255, 255, 255, 255], [0, 0, 0, 255], [0, 0, 0, 0], [255, 255, 255, 0]]
+    image = Image.fromarray(pixels, "RGBA")
+    image = image if mode == "RGBA" else image.convert(mode)
+    path = tmp_path / ("image.tiff" if mode == "CMYK" else "image.png")
+    image.save(path)
+    rgba = np.asarray(Image.open(path).convert("RGBA"), dtype=np.int64)
+    luma, alpha = rgba[..., :3] @ LUMA_PER_MILLE, rgba[..., 3]
+    exact = (luma * alpha + 255000 * (255 - alpha)) / (255000.0 * 255.0)
+    assert np.array_equal(load_gray(path.read_bytes()), exact)
+    assert exact.min() >= 0 and exact.max() <= 1

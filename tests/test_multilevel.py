@@ -11,6 +11,8 @@ from stipple.design import fibonacci_lattice
 from stipple.halftone import hexagonal_spacing, run
 from stipple.manifolds import ScaledTorus, Sphere, Torus
 from stipple.multilevel import (
+    BLOCK_SAMPLES,
+    SAMPLES_PER_CELL,
     cell_masses,
     coarse_to_fine,
     level_counts,
@@ -51,6 +53,30 @@ def test_cell_masses_are_the_nearest_point_sums(rng, shape):
     fast = cell_masses(weights, points, scale)
     assert np.allclose(fast, brute_force_masses(weights, points, scale, factor), atol=1e-12)
     assert fast.sum() == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("shape", [(300, 400), (301, 397)])
+def test_cell_masses_of_a_large_image_are_its_pixel_blocks_nearest_point_sums(rng, shape):
+    """With far more pixels than samples per dot the pixels are gathered into blocks (smaller along the far
+    edges), each block's mass to the dot nearest its centre: by direct periodic distances."""
+    weights = rng.random(shape)
+    points = rng.random((100, 2))
+    scale = torus_scale(shape)
+    block = int(np.sqrt(weights.size / (BLOCK_SAMPLES * SAMPLES_PER_CELL * len(points))))
+    assert block == 4
+    starts = [np.arange(0, size, block) for size in shape]
+    sums = np.add.reduceat(np.add.reduceat(weights, starts[0], axis=0), starts[1], axis=1)
+    y, x = ((start + np.minimum(start + block, size)) / 2 / size for start, size in zip(starts, shape, strict=True))
+    xx, yy = np.meshgrid(x, y)
+    delta = np.stack([xx.ravel(), yy.ravel()], axis=1)[:, None, :] - points[None, :, :]
+    delta -= np.rint(delta)
+    owner = np.argmin(np.sum((delta * scale) ** 2, axis=2), axis=1)
+    expected = np.bincount(owner, weights=sums.ravel(), minlength=len(points))
+    fast = cell_masses(weights, points, scale)
+    assert np.allclose(fast, expected / expected.sum(), atol=1e-12)
+    # Near the pixels' own masses (every pixel cut in 29 x 29): blocks are a coarser sampling, not another measure.
+    fine = cell_masses(weights, points, scale, samples_per_cell=10**6)
+    assert np.mean(np.abs(fast - fine) / fine) < 0.03
 
 
 def test_shares_keep_the_mass_of_every_cell_and_of_every_run_of_cells_along_the_curve(rng):

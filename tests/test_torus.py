@@ -7,6 +7,7 @@ from stipple.errors import StippleError
 from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
 from stipple.nufft import BACKENDS
 from stipple.optimize import SETTLE_WINDOW
+from stipple.sampling import MIN_BLOCK_LEVEL, _cells_at, _cells_through_blocks, hilbert_index, stratified_cells
 from stipple.torus import (
     DEFAULT_EPSILON,
     DERIVATIVE_EPSILON,
@@ -151,6 +152,28 @@ def test_stratified_start_gives_every_quadrant_its_share(rng):
             worst[name] = max(worst[name], np.abs(counts - count * mass).max())
     assert worst["stratified"] <= 2
     assert worst["iid"] > 10
+
+
+@pytest.mark.parametrize("shape", [(64, 64), (100, 37), (301, 517)])
+def test_stratified_cells_through_blocks_are_the_cells_through_every_pixel(rng, shape):
+    """A large image's stratified start finds its cells among blocks of pixels first: the Hilbert curve visits each
+    aligned block in one stretch, so the cells are those of the curve through every pixel (zeros included)."""
+    weights = rng.random(shape) ** 3
+    weights[:10, :20] = 0.0
+    rows, columns = shape
+    count = 200
+    fractions = (np.arange(count) + rng.random(count)) / count
+    row, column = np.divmod(np.arange(weights.size), columns)
+    order = int(np.ceil(np.log2(max(shape))))
+    every_pixel = _cells_at(weights, np.argsort(hilbert_index(column, row, order), kind="stable"), fractions)
+    for level in (1, 2, 3):
+        assert np.array_equal(_cells_through_blocks(weights, order, level, fractions), every_pixel)
+    # stratified_cells takes the blocks where an image has 16^2 pixels a point or more.
+    few = weights.size // 300
+    assert MIN_BLOCK_LEVEL == 2 and int(np.log2(weights.size / few) // 4) == 2
+    rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
+    fractions = (np.arange(few) + rng_b.random(few)) / few
+    assert np.array_equal(stratified_cells(weights, rng_a, few), _cells_through_blocks(weights, order, 2, fractions))
 
 
 def test_stratified_start_is_the_default_and_tol_refers_to_iid_samples():

@@ -20,10 +20,11 @@ import numpy as np
 
 from ..checks import check_integer
 from ..errors import StippleError
-from ..halftone import MAX_BANDWIDTH, Problem, check_count, darkest_level
+from ..halftone import MAX_BANDWIDTH, Problem, check_count
 from ..manifolds import Rectangle
 from ..nearfield import NearField, TorusPairs
 from ..objective import SumObjective
+from ..peaks import darkest_level
 from ..torus import check_weights, torus_problem
 from ..torus_spectrum import torus_near_kernel, torus_scale
 from .start import MIN_CURVE_VERTICES, initial_loop
@@ -121,7 +122,7 @@ def default_subdivisions(length, n_vertices):
 def darkest_tone(weights):
     """The density that the darkest ``DARKEST_MASS_SHARE`` of the ink reaches: the largest ``t`` with at least that
     share of ``sum w`` in pixels of ``w >= t`` (robust to a few outlying pixels, unlike ``max w``;
-    ``stipple.halftone.darkest_level``)."""
+    ``stipple.peaks.darkest_level``)."""
     return darkest_level(weights, mass_fraction=DARKEST_MASS_SHARE)[0]
 
 

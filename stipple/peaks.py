@@ -1,0 +1,30 @@
+"""How peaked a density is: the level above which its darkest share of the mass lies, against its mean."""
+
+import numpy as np
+
+
+def darkest_level(values, areas=None, mass_fraction=0.01):
+    """The density level above which ``mass_fraction`` of the mass lies (blind to a few dark pixels that hold
+    little mass, unlike the maximum), and the mean density: ``(level, mean)``."""
+    values = np.ravel(values).astype(float)
+    areas = np.ones_like(values) if areas is None else np.ravel(areas)
+    total = float(np.sum(values * areas))
+    # Only the darkest values are sorted (a 12-megapixel photo took 1.7 s a call to sort them all): the darkest
+    # mass_fraction of the pixels hold at least mass_fraction of the mass where every pixel has the same area.
+    count = max(1, int(np.ceil(mass_fraction * len(values))))
+    while True:
+        darkest = np.argpartition(values, len(values) - count)[len(values) - count :]
+        darkest = darkest[np.argsort(values[darkest], kind="stable")[::-1]]
+        mass = np.cumsum(values[darkest] * areas[darkest])
+        if mass[-1] >= mass_fraction * total or count == len(values):
+            break
+        count = min(2 * count, len(values))
+    level = values[darkest][min(np.searchsorted(mass, mass_fraction * total), count - 1)]
+    return float(level), total / areas.sum()
+
+
+def peak_ratio(values, areas=None, mass_fraction=0.01):
+    """How much denser than average the densest ``mass_fraction`` of the density is: ``darkest_level`` over the
+    mean density, 1 for a constant density, about the peak-to-mean ratio for a bump."""
+    level, mean = darkest_level(values, areas, mass_fraction)
+    return float(max(level / mean, 1.0))
