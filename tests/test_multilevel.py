@@ -23,7 +23,14 @@ from stipple.multilevel import (
 )
 from stipple.sphere import sphere_problem
 from stipple.sphere_density import CellMap
-from stipple.torus import stiffness_field, torus_problem
+from stipple.torus import (
+    STIFFNESS_FLOOR,
+    STIFFNESS_POWER,
+    cell_means,
+    periodic_blur,
+    stiffness_field,
+    torus_problem,
+)
 from stipple.torus_spectrum import torus_scale
 from stipple.transforms import spherical_angles
 
@@ -385,3 +392,37 @@ def test_the_video_blur_of_a_stack_is_each_frames():
     stack = np.random.default_rng(4).random((3, 40, 60))
     expected = gaussian_filter(stack, (0, 2.5, 2.5), mode="wrap")
     assert np.array_equal(_blur(stack, 2.5), expected) and np.array_equal(_blur(stack[0], 2.5), expected[0])
+
+
+@pytest.mark.parametrize("shape, size", [((40, 60), 4.0), ((37, 53), 5.7), ((9, 31), 3.0), ((20, 20), 1.9)])
+def test_cell_means_are_the_means_of_the_pixels_centred_in_uniform_cells(rng, shape, size):
+    values = rng.random(shape)
+    means = cell_means(values, size)
+    if size < 2:
+        assert means is values
+        return
+    cells = tuple(-(-length // int(size)) for length in shape)
+    assert means.shape == cells
+    # By definition: the pixel whose centre lies in cell (i, j) of the uniform grid belongs to it.
+    row_cell, column_cell = (((np.arange(n) + 0.5) / n * c).astype(int) for n, c in zip(shape, cells, strict=True))
+    for i in range(cells[0]):
+        for j in range(cells[1]):
+            inside = values[np.ix_(row_cell == i, column_cell == j)]
+            assert inside.size > 0 and means[i, j] == pytest.approx(inside.mean(), rel=1e-12)
+
+
+def test_stiffness_field_of_a_large_image_is_its_pixels_field_on_quarter_spacing_cells(rng):
+    """Blurred at one dot spacing on cells of a quarter spacing (21 px here), the field is the pixels' own to a
+    few per cent: a metric's factor, not a measure."""
+    y, x = np.mgrid[0:900, 0:1300]
+    weights = 0.05 + np.sin(x / 60.0) ** 2 * np.cos(y / 45.0) ** 2 + 3.0 * (rng.random((900, 1300)) < 0.01)
+    field = stiffness_field(weights, 3000)
+    spacing = hexagonal_spacing(3000, np.prod(torus_scale(weights.shape))) * 1300
+    assert field.shape == (180, 260)
+    blurred = periodic_blur(weights, spacing)
+    pixels = np.maximum(blurred / blurred.mean(), STIFFNESS_FLOOR) ** STIFFNESS_POWER
+    rows, columns = (((np.arange(n) + 0.5) / n * c).astype(int) for n, c in zip((900, 1300), field.shape, strict=True))
+    error = np.abs(field[np.ix_(rows, columns)] - pixels) / pixels
+    assert np.mean(error) < 0.04 and np.max(error) < 0.15
+    # The constant density's field is 1 on any grid.
+    assert np.allclose(stiffness_field(np.full((900, 1300), 0.3), 3000), 1.0)

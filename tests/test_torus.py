@@ -3,10 +3,12 @@ import pytest
 from conftest import assert_derivatives_alike, backend_params
 from scipy.special import roots_legendre
 
+from stipple import torus_spectrum
 from stipple.errors import StippleError
 from stipple.halftone import COARSE_LEVELS, DEFAULT_SETTLE, run
 from stipple.nufft import BACKENDS
 from stipple.optimize import SETTLE_WINDOW
+from stipple.peaks import peak_ratio
 from stipple.sampling import MIN_BLOCK_LEVEL, _cells_at, _cells_through_blocks, hilbert_index, stratified_cells
 from stipple.torus import (
     DEFAULT_EPSILON,
@@ -19,6 +21,7 @@ from stipple.torus import (
 )
 from stipple.torus_spectrum import (
     CACHED_MODES,
+    PixelDensity,
     axis_bandwidths,
     image_coefficients,
     radial_on_modes,
@@ -52,6 +55,34 @@ def test_image_coefficients_are_exact_integrals(rng, shape, bandwidth):
     bandwidths = axis_bandwidths(bandwidth, shape)
     exact = brute_force_coefficients(weights, bandwidths)
     np.testing.assert_allclose(image_coefficients(weights, bandwidths), exact, atol=1e-14)
+
+
+def test_pixel_density_shares_one_fft_and_one_peak_among_a_runs_problems(rng, monkeypatch):
+    """A problem's coarse levels and its correction's coarse problems are built on the same ``PixelDensity``:
+    the same exact coefficients at every bandwidth from one FFT, and one peak ratio."""
+    weights = rng.random((30, 44)) ** 2
+    density = PixelDensity(weights)
+    for bandwidth in (8, 20, 44):
+        bandwidths = axis_bandwidths(bandwidth, weights.shape)
+        exact = brute_force_coefficients(weights, bandwidths)
+        np.testing.assert_allclose(density.coefficients(bandwidths), exact, atol=1e-14)
+    assert density.peak_ratio == peak_ratio(weights)
+    calls = {"fft2": 0, "peak": 0}
+    fft2, peak = np.fft.fft2, torus_spectrum.peak_ratio
+
+    def counted(name, function):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return function(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr(np.fft, "fft2", counted("fft2", fft2))
+    monkeypatch.setattr(torus_spectrum, "peak_ratio", counted("peak", peak))
+    problem = torus_problem(weights, 400, threads=1)
+    for other in (problem.level(100), problem.coarse(8), problem.coarse(4)):
+        assert other.bandwidth < problem.bandwidth
+    assert calls == {"fft2": 1, "peak": 1}
 
 
 def test_axis_bandwidths_keep_resolution_isotropic():
