@@ -26,5 +26,7 @@ def darkest_level(values, areas=None, mass_fraction=0.01):
 def peak_ratio(values, areas=None, mass_fraction=0.01):
     """How much denser than average the densest ``mass_fraction`` of the density is: ``darkest_level`` over the
     mean density, 1 for a constant density, about the peak-to-mean ratio for a bump."""
+    if np.ptp(values) == 0:  # constant (the even input a peak is compared with): no sort at all
+        return 1.0
     level, mean = darkest_level(values, areas, mass_fraction)
     return float(max(level / mean, 1.0))

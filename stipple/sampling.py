@@ -50,7 +50,7 @@ def hilbert_index(x, y, order=16):
 
 def sample_image(weights, rng, count):
     """``count`` i.i.d. points in [0, 1)² with density proportional to the pixel-constant ``weights``."""
-    return _points_in_cells(weights, rng, _cells_at(weights, np.arange(weights.size), rng.random(count)))
+    return _points_in_cells(weights, rng, _cells_at(weights, None, rng.random(count)))
 
 
 def stratified_sample(weights, rng, count):
@@ -121,10 +121,11 @@ def _cells_through_blocks(weights, order, level, fractions):
 
 
 def _cells_at(weights, cell_order, fractions):
-    """The cells (flat indices) at the given fractions of the mass, accumulated over cells in ``cell_order``."""
-    cumulative = np.cumsum(weights.ravel()[cell_order])
-    positions = np.searchsorted(cumulative, fractions * cumulative[-1], side="right")
-    return cell_order[np.minimum(positions, weights.size - 1)]
+    """The cells (flat indices) at the given fractions of the mass, accumulated over cells in ``cell_order`` (None:
+    the cells' own order)."""
+    cumulative = np.cumsum(weights.ravel() if cell_order is None else weights.ravel()[cell_order])
+    positions = np.minimum(np.searchsorted(cumulative, fractions * cumulative[-1], side="right"), weights.size - 1)
+    return positions if cell_order is None else cell_order[positions]
 
 
 def _points_in_cells(weights, rng, cells):
