@@ -6,21 +6,21 @@ import numpy as np
 def darkest_level(values, areas=None, mass_fraction=0.01):
     """The density level above which ``mass_fraction`` of the mass lies (blind to a few dark pixels that hold
     little mass, unlike the maximum), and the mean density: ``(level, mean)``."""
-    values = np.ravel(values).astype(float)
-    areas = np.ones_like(values) if areas is None else np.ravel(areas)
-    total = float(np.sum(values * areas))
+    values = np.asarray(values, dtype=float).ravel()
+    masses = values if areas is None else values * np.ravel(areas)
+    total = float(np.sum(masses))
     # Only the darkest values are sorted (a 12-megapixel photo took 1.7 s a call to sort them all): the darkest
     # mass_fraction of the pixels hold at least mass_fraction of the mass where every pixel has the same area.
     count = max(1, int(np.ceil(mass_fraction * len(values))))
     while True:
         darkest = np.argpartition(values, len(values) - count)[len(values) - count :]
         darkest = darkest[np.argsort(values[darkest], kind="stable")[::-1]]
-        mass = np.cumsum(values[darkest] * areas[darkest])
+        mass = np.cumsum(masses[darkest])
         if mass[-1] >= mass_fraction * total or count == len(values):
             break
         count = min(2 * count, len(values))
     level = values[darkest][min(np.searchsorted(mass, mass_fraction * total), count - 1)]
-    return float(level), total / areas.sum()
+    return float(level), total / (len(values) if areas is None else np.sum(areas))
 
 
 def peak_ratio(values, areas=None, mass_fraction=0.01):
