@@ -46,37 +46,58 @@ def cell_factor(k, cells):
     return np.where(z == 0, 1.0, (1 - np.exp(-safe)) / safe)
 
 
-def image_coefficients(weights, bandwidths, spectrum=None):
+def image_coefficients(weights, bandwidths, dft=None):
     """Exact ``w_n = int_{[0,1)^2} w(u) e^{-2 pi i n.u} du`` of the pixel-constant image, ``|n_j| <= N_j/2``.
 
     Returns an array of shape ``(N1+1, N2+1)``, first axis ``n1`` (x, columns), second ``n2`` (y, rows). The
-    cell factors are separable: computed per axis (at M = 10^6 the 2-D grid has 14 million modes). ``spectrum``
-    is ``weights``' FFT where it is known (``PixelDensity``).
+    cell factors are separable: computed per axis (at M = 10^6 the 2-D grid has 14 million modes). ``dft`` is
+    ``image_dft`` at these or larger bandwidths, where it is known (``PixelDensity``).
     """
     rows, columns = weights.shape
-    spectrum = np.fft.fft2(weights) if spectrum is None else spectrum
+    dft = image_dft(weights, bandwidths) if dft is None else centred_block(dft, bandwidths)
     n1, n2 = (centred_modes(bandwidth) for bandwidth in bandwidths)
-    dft = spectrum[np.ix_(n2 % rows, n1 % columns)].T
     factors = np.outer(cell_factor(n1, columns), cell_factor(n2, rows)) / (rows * columns)
     return np.ascontiguousarray(dft * factors)
 
 
+# An image with this many pixels or more per mode along both axes has its DFT taken at the modes' columns only.
+PARTIAL_DFT_PIXELS = 4
+
+
+def image_dft(weights, bandwidths):
+    """The DFT of ``weights`` at the modes ``|n_j| <= N_j/2``, shape ``(N1+1, N2+1)`` (``n1``, columns, first): the
+    whole FFT's, or, on an image of ``PARTIAL_DFT_PIXELS`` pixels per mode or more, the same sums from a real FFT
+    of every row and an FFT of the modes' columns only (a 12-megapixel photo with 30000 dots: 0.3 s for 1.6)."""
+    rows, columns = weights.shape
+    n1, n2 = (centred_modes(bandwidth) for bandwidth in bandwidths)
+    if columns < PARTIAL_DFT_PIXELS * len(n1) or rows < PARTIAL_DFT_PIXELS * len(n2):
+        return np.fft.fft2(weights)[np.ix_(n2 % rows, n1 % columns)].T
+    half = np.fft.rfft(weights, axis=1)[:, : n1[-1] + 1]
+    # A real row's frequency -n is the conjugate of n.
+    row_sums = np.concatenate([np.conj(half[:, :0:-1]), half], axis=1)
+    return np.fft.fft(row_sums, axis=0)[n2 % rows].T
+
+
+def centred_block(modes, bandwidths):
+    """The modes ``|n_j| <= N_j/2`` of a centred mode array of larger (or equal) bandwidths."""
+    offsets = [(size - (bandwidth + 1)) // 2 for size, bandwidth in zip(modes.shape, bandwidths, strict=True)]
+    return modes[offsets[0] : offsets[0] + bandwidths[0] + 1, offsets[1] : offsets[1] + bandwidths[1] + 1]
+
+
 class PixelDensity:
     """A density given by pixels (checked and scaled, ``stipple.torus.torus_problem``) and what the problems built
-    on it share, each computed once: its FFT, read at every bandwidth (``coefficients``), and its ``peak_ratio``
-    (``stipple.torus.default_bandwidth``). A run builds its coarse levels and its correction's coarse problems on
-    the same image: a 12-megapixel photo took 0.5 s a transform and 0.25 s a peak, four times each."""
+    on it share, each computed once: its DFT at the largest bandwidths asked for, read at every smaller one
+    (``coefficients``), and its ``peak_ratio`` (``stipple.torus.default_bandwidth``). A run builds its coarse
+    levels and its correction's coarse problems on the same image, at smaller bandwidths than its own: a
+    12-megapixel photo took 0.5 s a transform and 0.25 s a peak, four times each."""
 
     def __init__(self, weights):
         self.weights = weights
+        self._dft = None
 
     @property
     def shape(self):
         return self.weights.shape
-
-    @cached_property
-    def spectrum(self):
-        return np.fft.fft2(self.weights)
 
     @cached_property
     def peak_ratio(self):
@@ -84,7 +105,10 @@ class PixelDensity:
 
     def coefficients(self, bandwidths):
         """``image_coefficients`` of the pixels at ``bandwidths``."""
-        return image_coefficients(self.weights, bandwidths, self.spectrum)
+        known = (0, 0) if self._dft is None else tuple(size - 1 for size in self._dft.shape)
+        if bandwidths[0] > known[0] or bandwidths[1] > known[1]:
+            self._dft = image_dft(self.weights, tuple(map(max, bandwidths, known)))
+        return image_coefficients(self.weights, bandwidths, self._dft)
 
 
 def radial_on_modes(radial, bandwidths, scale):

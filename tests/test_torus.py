@@ -49,8 +49,10 @@ def brute_force_coefficients(weights, bandwidths):
     return np.einsum("rc,ac,br->ab", weights, along_x, along_y)
 
 
-@pytest.mark.parametrize("shape,bandwidth", [((5, 7), 6), ((6, 4), 20), ((3, 3), 30)])
+@pytest.mark.parametrize("shape,bandwidth", [((5, 7), 6), ((6, 4), 20), ((3, 3), 30), ((41, 60), 8), ((75, 31), 6)])
 def test_image_coefficients_are_exact_integrals(rng, shape, bandwidth):
+    """Small images by their whole FFT; the last two, with 4 pixels per mode or more, by a real FFT of the rows and
+    an FFT of the modes' columns (``image_dft``)."""
     weights = rng.random(shape)
     bandwidths = axis_bandwidths(bandwidth, shape)
     exact = brute_force_coefficients(weights, bandwidths)
@@ -67,6 +69,12 @@ def test_pixel_density_shares_one_fft_and_one_peak_among_a_runs_problems(rng, mo
         exact = brute_force_coefficients(weights, bandwidths)
         np.testing.assert_allclose(density.coefficients(bandwidths), exact, atol=1e-14)
     assert density.peak_ratio == peak_ratio(weights)
+    # The largest bandwidths asked for are kept, and the smaller ones read from them, in the same bits.
+    large = PixelDensity(rng.random((200, 300)))
+    first = large.coefficients(axis_bandwidths(40, (200, 300)))
+    again = large.coefficients(axis_bandwidths(12, (200, 300)))
+    assert np.array_equal(again, image_coefficients(large.weights, axis_bandwidths(12, (200, 300))))
+    assert np.array_equal(large.coefficients(axis_bandwidths(40, (200, 300))), first)
     calls = {"fft2": 0, "peak": 0}
     fft2, peak = np.fft.fft2, torus_spectrum.peak_ratio
 
