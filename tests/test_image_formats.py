@@ -137,3 +137,18 @@ def test_colour_images_gray_is_the_exact_luma_composited_on_white(tmp_path, mode
     exact = (luma * alpha + 255000 * (255 - alpha)) / (255000.0 * 255.0)
     assert np.array_equal(load_gray(path.read_bytes()), exact)
     assert exact.min() >= 0 and exact.max() <= 1
+
+
+@pytest.mark.parametrize("mode", ["RGBA", "RGB", "P", "CMYK"])
+def test_colour_images_are_composited_on_white_opaque_or_not(mode, rng):
+    """``image_colour`` skips the composite where every pixel is opaque: the same values as composited."""
+    from stipple.io.images import image_colour
+
+    pixels = rng.integers(0, 256, (29, 41, 4), dtype=np.uint8)
+    image = Image.fromarray(pixels, "RGBA")
+    image = image if mode == "RGBA" else image.convert(mode)
+    rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+    composited = rgba[..., :3] * rgba[..., 3:] + (1.0 - rgba[..., 3:])
+    assert np.array_equal(image_colour(image), composited)
+    if mode in ("RGBA", "RGB"):  # both paths taken
+        assert (mode == "RGBA") == bool(np.any(rgba[..., 3] < 1))
