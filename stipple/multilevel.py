@@ -224,9 +224,14 @@ def split_points(weights, points, n_points, scale, threads=1):
 def sphere_cell_masses(cells, points, samples_per_cell=SAMPLES_PER_CELL, threads=1):
     """``cell_masses`` on the sphere: the mass of the cell map ``cells`` (``stipple.sphere_density.CellMap``) in
     the spherical Voronoi cell of each of ``points`` (unit vectors), as fractions; every map cell is cut into
-    ``f x f`` sub-cells, each of whose mass goes to the dot nearest to its centre."""
-    factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / cells.values.size))))
-    centres, sub_masses = cells.refined(factor).centres_and_masses()
+    ``f x f`` sub-cells, or on a large map cells are gathered into blocks, as ``cell_masses`` does, each of whose
+    mass goes to the dot nearest to its centre."""
+    block = int(np.sqrt(cells.values.size / (BLOCK_SAMPLES * samples_per_cell * len(points))))
+    if block > 1:
+        centres, sub_masses = cells.centres_and_masses(block)
+    else:
+        factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / cells.values.size))))
+        centres, sub_masses = cells.refined(factor).centres_and_masses()
     inked = sub_masses > 0
     _, owner = cKDTree(points).query(centres[inked], workers=threads)
     masses = np.bincount(owner, weights=sub_masses[inked], minlength=len(points))

@@ -39,6 +39,8 @@ from .spread import spread_close_sphere
 from .torus import (
     DIRECT_BLUR_SIGMA,
     SOLVE_BANDWIDTH_FACTOR,
+    STIFFNESS_CELLS_PER_SPACING,
+    cell_means,
     check_bandwidth_factor,
     check_weights,
     derivative_accuracy,
@@ -116,7 +118,9 @@ def stiffness_map(density, n_points):
     cells = density.cell_map()
     rows = cells.values.shape[0]
     spacing = hexagonal_spacing(n_points, 4 * np.pi) / (np.pi / rows)
-    blurred = map_blur(np.asarray(cells.values, dtype=float), max(spacing, 0.5))
+    # On cells of a quarter spacing where those are two cells or more, as on the torus.
+    coarse = cell_means(np.asarray(cells.values, dtype=float), spacing / STIFFNESS_CELLS_PER_SPACING)
+    blurred = map_blur(coarse, max(spacing * coarse.shape[0] / rows, 0.5))
     return CellMap(stiffness(blurred, density.mean), cells.lon0)
 
 

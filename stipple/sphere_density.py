@@ -72,13 +72,19 @@ class CellMap:
         """The same map with every cell cut into ``factor x factor`` cells (equal in colatitude and longitude)."""
         return CellMap(np.repeat(np.repeat(self.values, factor, axis=0), factor, axis=1), self.lon0)
 
-    def centres_and_masses(self):
-        """Unit vectors of the cell centres and the density's mass in each cell (flattened)."""
+    def centres_and_masses(self, block=1):
+        """Unit vectors of the cell centres and the density's mass in each cell (flattened); with ``block``, of
+        blocks of ``block x block`` cells (smaller along the last rows and columns), each centred in colatitude
+        and longitude."""
         rows, columns = self.values.shape
-        theta = (np.arange(rows) + 0.5) * np.pi / rows
-        phi = np.radians(self.lon0) + (np.arange(columns) + 0.5) * 2 * np.pi / columns
+        masses = self.values * self.cell_areas
+        top, left = np.arange(0, rows, block), np.arange(0, columns, block)
+        if block > 1:
+            masses = np.add.reduceat(np.add.reduceat(masses, top, axis=0), left, axis=1)
+        theta = (top + np.minimum(top + block, rows)) / 2 * np.pi / rows
+        phi = np.radians(self.lon0) + (left + np.minimum(left + block, columns)) / 2 * 2 * np.pi / columns
         centres = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
-        return centres.reshape(-1, 3), (self.values * self.cell_areas).ravel()
+        return centres.reshape(-1, 3), masses.ravel()
 
     def sample(self, rng, count):
         """I.i.d. points from the cell-constant density: a cell by its mass, then uniform in area."""

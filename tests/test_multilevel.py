@@ -268,6 +268,31 @@ def test_sphere_cell_masses_are_the_nearest_point_sums(rng):
     assert fast.sum() == pytest.approx(1.0)
 
 
+def test_sphere_cell_masses_of_a_large_map_are_its_blocks_nearest_point_sums(rng):
+    """A map of far more cells than samples per dot is gathered into blocks (smaller along the last rows and
+    columns), each block's exact mass to the dot nearest its centre in colatitude and longitude."""
+    rows, columns = 130, 262
+    values = rng.random((rows, columns))
+    cells = CellMap(values, lon0=-30.0)
+    points = Sphere().random(rng, 20)
+    block = int(np.sqrt(values.size / (BLOCK_SAMPLES * SAMPLES_PER_CELL * len(points))))
+    assert block == 5
+    edges = np.cos(np.linspace(0, np.pi, rows + 1))
+    areas = (edges[:-1] - edges[1:])[:, None] * np.full(columns, 2 * np.pi / columns)
+    top, left = np.arange(0, rows, block), np.arange(0, columns, block)
+    sums = np.add.reduceat(np.add.reduceat(values * areas, top, axis=0), left, axis=1)
+    theta = (top + np.minimum(top + block, rows)) / 2 * np.pi / rows
+    phi = np.radians(-30.0) + (left + np.minimum(left + block, columns)) / 2 * 2 * np.pi / columns
+    tt, pp = np.meshgrid(theta, phi, indexing="ij")
+    centres = np.stack([np.sin(tt) * np.cos(pp), np.sin(tt) * np.sin(pp), np.cos(tt)], axis=-1).reshape(-1, 3)
+    owner = np.argmax(centres @ points.T, axis=1)
+    expected = np.bincount(owner, weights=sums.ravel(), minlength=len(points))
+    fast = sphere_cell_masses(cells, points)
+    assert np.allclose(fast, expected / expected.sum(), atol=1e-12)
+    fine = brute_force_sphere_masses(CellMap(values), points, 1)  # every cell: near, a coarser sampling only
+    assert np.mean(np.abs(sphere_cell_masses(CellMap(values), points) - fine) / fine) < 0.05
+
+
 def test_sphere_split_keeps_the_mass_in_every_cell_and_children_stay_near(rng):
     values = rng.random((18, 36)) ** 2
     values[:4] = 0.0
