@@ -64,15 +64,32 @@ def make_inputs(folder):
             .resize((512, 256), Image.Resampling.LANCZOS)
         ),
         "coffee300x200.png": lambda: Image.fromarray(photo("coffee")).resize((300, 200), Image.Resampling.LANCZOS),
+        # A phone camera's 12 megapixels: the coffee cup, with a sensor's pixel noise, as a JPEG; a 4320 x 2160 map.
+        "coffee4032x3024.jpg": lambda: noisy_photo("coffee", (4032, 3024)),
+        "topo4320x2160.npy": lambda: np.asarray(
+            Image.fromarray(np.load(SAMPLES / "topo.npy").astype(np.float32)).resize((4320, 2160), Image.BICUBIC)
+        ),
     }
     for name, make in makers.items():
         if not (folder / name).exists():
-            make().save(folder / name)
+            made = make()
+            if name.endswith(".npy"):
+                np.save(folder / name, made)
+            else:
+                made.save(folder / name, quality=92)
     return folder
 
 
+def noisy_photo(name, size):
+    """A bundled photo resized to ``size`` with Gaussian pixel noise of 4 levels (deterministic)."""
+    pixels = np.asarray(Image.fromarray(photo(name)).resize(size, Image.Resampling.LANCZOS), dtype=float)
+    pixels += np.random.default_rng(0).normal(0.0, 4.0, pixels.shape)
+    return Image.fromarray(np.clip(np.rint(pixels), 0, 255).astype(np.uint8))
+
+
 def cases(inputs):
-    """name -> (command arguments after ``stipple``, input, outputs, evaluate options)."""
+    """name -> (command arguments after ``stipple``, input, outputs, evaluate options[, the picture's blur in input
+    pixels, default 4])."""
     portrait = str(SAMPLES / "astronaut256.png")
     topo = str(SAMPLES / "topo.npy")
     camera = str(SAMPLES / "camera128.png")
@@ -95,6 +112,20 @@ def cases(inputs):
         ),
         "sphere": (["sphere", topo, "-M", "200000"], topo, ("csv",), []),
         "million": (["torus", str(inputs / "cat1024.png"), "-M", "1000000"], inputs / "cat1024.png", ("csv",), []),
+        # The picture judged at 16 input pixels: 4 of the PNG's (1024 wide) pixels, as for the other cases.
+        "photo": (
+            ["torus", str(inputs / "coffee4032x3024.jpg"), "-M", "30000"],
+            inputs / "coffee4032x3024.jpg",
+            ("png", "csv"),
+            [],
+            16,
+        ),
+        "map": (
+            ["sphere", str(inputs / "topo4320x2160.npy"), "-M", "20000"],
+            inputs / "topo4320x2160.npy",
+            ("csv",),
+            [],
+        ),
     }
 
 
@@ -125,7 +156,7 @@ def iterations_from(stderr):
     return int(match[0]) if match else None
 
 
-def evaluate(new, outputs, source, options, cwd=None):
+def evaluate(new, outputs, source, options, cwd=None, picture_sigma=4):
     """The new version's measures of one run's outputs (``stipple evaluate`` started in ``cwd``)."""
     report = {}
     csv = outputs.get("csv")
@@ -137,7 +168,7 @@ def evaluate(new, outputs, source, options, cwd=None):
     png = outputs.get("png")
     if png is not None and png.exists():
         text = subprocess.run(
-            [*new, "evaluate", str(png), str(source), "--sigma", "4", "--json", "-"],
+            [*new, "evaluate", str(png), str(source), "--sigma", f"{picture_sigma:g}", "--json", "-"],
             capture_output=True,
             text=True,
             cwd=cwd,
@@ -170,7 +201,7 @@ def summary(report):
 
 
 def run_case(name, spec, versions, repeats, out, timeout):
-    arguments, source, formats, evaluate_options = spec
+    arguments, source, formats, evaluate_options, *picture_sigma = spec
     runs = {label: [] for label in versions}
     outputs = {}
     for round_ in range(repeats):
@@ -204,7 +235,9 @@ def run_case(name, spec, versions, repeats, out, timeout):
             "peak_gib": max(item["peak_bytes"] for item in runs[label]) / 2**30,
             "iterations": [item["iterations"] for item in runs[label]],
             "returncodes": [item["returncode"] for item in runs[label]],
-            "quality": summary(evaluate(versions["new"][0], outputs[label], source, evaluate_options, cwd=out)),
+            "quality": summary(
+                evaluate(versions["new"][0], outputs[label], source, evaluate_options, out, *picture_sigma)
+            ),
         }
     if "old" in versions:
         old = entry["versions"]["old"]

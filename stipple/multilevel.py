@@ -75,19 +75,22 @@ def cell_masses(weights, points, scale, samples_per_cell=SAMPLES_PER_CELL, threa
     """
     scale = np.asarray(scale, dtype=float)
     tree = _periodic_tree(np.mod(points, 1.0) * scale, scale)
-    block = int(np.sqrt(weights.size / (BLOCK_SAMPLES * samples_per_cell * len(points))))
-    if block > 1:
-        bands = _pixel_blocks(weights, block, scale)
-    else:
-        bands = _sub_pixels(
-            weights, max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / weights.size)))), scale
-        )
+    block, factor = sampling_grid(weights.size, len(points), samples_per_cell)
+    bands = _pixel_blocks(weights, block, scale) if block > 1 else _sub_pixels(weights, factor, scale)
     masses = np.zeros(len(points))
     for positions, values in bands:
         inked = values > 0
         _, owner = tree.query(positions[inked], workers=threads)
         masses += np.bincount(owner, weights=values[inked], minlength=len(points))
     return masses / masses.sum()
+
+
+def sampling_grid(cells, dots, samples_per_cell):
+    """``(block, factor)``: a grid of ``cells`` cells measured for ``dots`` dots' masses is gathered into blocks of
+    ``block x block`` cells where ``block > 1`` (``BLOCK_SAMPLES * samples_per_cell`` blocks per dot or more), else
+    cut into ``factor x factor`` sub-cells (``samples_per_cell`` or more per dot)."""
+    block = int(np.sqrt(cells / (BLOCK_SAMPLES * samples_per_cell * dots)))
+    return block, max(1, int(np.ceil(np.sqrt(samples_per_cell * dots / cells))))
 
 
 # Samples a band of ``cell_masses`` holds at most: bounded memory at any size.
@@ -226,11 +229,10 @@ def sphere_cell_masses(cells, points, samples_per_cell=SAMPLES_PER_CELL, threads
     the spherical Voronoi cell of each of ``points`` (unit vectors), as fractions; every map cell is cut into
     ``f x f`` sub-cells, or on a large map cells are gathered into blocks, as ``cell_masses`` does, each of whose
     mass goes to the dot nearest to its centre."""
-    block = int(np.sqrt(cells.values.size / (BLOCK_SAMPLES * samples_per_cell * len(points))))
+    block, factor = sampling_grid(cells.values.size, len(points), samples_per_cell)
     if block > 1:
         centres, sub_masses = cells.centres_and_masses(block)
     else:
-        factor = max(1, int(np.ceil(np.sqrt(samples_per_cell * len(points) / cells.values.size))))
         centres, sub_masses = cells.refined(factor).centres_and_masses()
     inked = sub_masses > 0
     _, owner = cKDTree(points).query(centres[inked], workers=threads)
