@@ -153,6 +153,25 @@ def test_a_full_stdout_leaves_the_files_untouched(folder):
     assert snapshot(folder) == before and leftovers(folder) == []
 
 
+def test_a_reader_that_stops_part_way_is_a_failed_write(folder):
+    """A pipe whose reader stops after 1000 bytes took a short write without an error: the CSV was cut, the
+    process exited 0 and the other outputs were replaced (a hostile sweep)."""
+    before = snapshot(folder)
+    fast = ["-N", "16", "--iterations", "1", "-q", "--seed", "1"]
+    process = subprocess.Popen(
+        [os.sys.executable, "-m", "stipple", "torus", "in.png", "-M", "8000", *fast, "-o", "-", "-o", "a.csv"],
+        cwd=folder,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert len(process.stdout.read(1000)) == 1000
+    process.stdout.close()
+    stderr = process.stderr.read().decode()
+    assert process.wait(timeout=120) == 1
+    assert stderr.strip().splitlines() == ["Error: cannot write to stdout (Broken pipe)"]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
 def with_stdout_closed(arguments, folder):
     """``stipple arguments`` as a process started without a standard output."""
     return subprocess.run(

@@ -363,7 +363,14 @@ def write_stdout(data):
         raise StippleError("cannot write to stdout: it is closed")
     try:
         stream.flush()
-        stream.buffer.write(data)
+        # A pipe whose reader stops part-way takes a short write without an error (the next write has it): a
+        # video's CSV to `| dd count=20` exited 0 with a fifth of it written (a hostile sweep).
+        remaining = memoryview(data)
+        while remaining:
+            written = stream.buffer.write(remaining)
+            if not written:
+                raise OSError("the write was not taken")
+            remaining = remaining[written:]
         stream.buffer.flush()
     except (OSError, ValueError) as error:
         _discard_stdout()
