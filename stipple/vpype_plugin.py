@@ -18,6 +18,7 @@ import vpype_cli
 from .colour import check_palette_extras, halftone_colour, palette_number, parse_palette
 from .errors import StippleError
 from .halftone import check_count
+from .io.units import INTEGER, MAX_LENGTH_MM, MIN_LENGTH_MM
 from .line import LINE_ITERATIONS
 from .multiclass import class_slices
 from .pipelines.colour import ink_layers
@@ -148,11 +149,15 @@ CSS_PIXEL_MM = 25.4 / 96
 
 
 def check_lengths(seed, **lengths):
-    """Refuse, in one line, a length that is not positive and finite (None: not given) and a negative seed, as
-    stipple's commands do (the plug-in drew ``stroke-width="-3.78"`` or raised from deep inside)."""
+    """Refuse, in one line, a length outside stipple's own range, 1 µm to 1 km (None: not given), and a negative
+    seed, as stipple's commands do (the plug-in drew ``stroke-width="-3.78"``, a page 1e299 cm wide, or raised from
+    deep inside for a pen 1e300 mm wide)."""
     for name, value in lengths.items():
-        if value is not None and not (np.isfinite(value) and value > 0):
-            raise StippleError(f"--{name.replace('_', '-')} must be a positive length, not {value:g} (CSS pixels)")
+        if value is not None and not (np.isfinite(value) and MIN_LENGTH_MM <= value * CSS_PIXEL_MM <= MAX_LENGTH_MM):
+            raise StippleError(
+                f"--{name.replace('_', '-')} must be a length from {MIN_LENGTH_MM:g}mm to {MAX_LENGTH_MM:g}mm, "
+                f"not {value * CSS_PIXEL_MM:g}mm"
+            )
     if not 0 <= seed < 2**63:
         raise StippleError(f"--seed must be an integer in [0, 2^63), not {seed!r}")
 
@@ -163,10 +168,9 @@ def plugin_count(text, image, width, pen_width, options):
     from .render.pen_count import auto_count, ink_darkness
 
     if str(text).strip().lower() != "auto":
-        try:
-            count = int(text)
-        except ValueError:
-            raise StippleError(f"-M must be a whole number or 'auto', not {text!r}") from None
+        if not INTEGER.fullmatch(str(text)):
+            raise StippleError(f"-M must be a whole number or 'auto', not {text!r}")
+        count = int(text)
         return check_count(count)  # before the pen's density divides by it (-M 0: a numpy warning, then the error)
     darkness = ink_darkness(image, parse_palette(options["separation"]), options["black"])
     count = auto_count(darkness, width * CSS_PIXEL_MM, options["dot_style"], pen_width * CSS_PIXEL_MM)

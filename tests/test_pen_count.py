@@ -241,10 +241,16 @@ def test_vpype_plugin_auto_count(tmp_path):
 @pytest.mark.parametrize(
     "options, message",
     [
-        ("-w 0", "--width must be a positive length"),
-        ("--pen-width -1mm", "--pen-width must be a positive length"),
-        ("-M auto --dot-style point --pen-width 0", "--pen-width must be a positive length"),
-        ("--dot-radius -1mm", "--dot-radius must be a positive length"),
+        ("-w 0", "--width must be a length from 0.001mm to 1e\\+06mm"),
+        ("--pen-width -1mm", "--pen-width must be a length from"),
+        ("-M auto --dot-style point --pen-width 0", "--pen-width must be a length from"),
+        ("--dot-radius -1mm", "--dot-radius must be a length from"),
+        # A hostile sweep: tracebacks for a pen of 1e300 mm or 1e-300 mm, a page 1e299 cm wide with exit 0.
+        ("--pen-width 1e300mm", "--pen-width must be a length from"),
+        ("-M auto --dot-style point --pen-width 1e-300mm", "--pen-width must be a length from"),
+        ("-w 1e300mm", "--width must be a length from"),
+        ("--dot-radius 1e300", "--dot-radius must be a length from"),
+        ("-M 3_00", "whole number or 'auto'"),
         ("--seed -1", "--seed must be an integer"),
         ("--palette cmy --black 0.5", "--black is for --palette cmyk"),
         ("-M 0", "number of points must be an integer in"),  # after a numpy divide-by-zero warning
