@@ -155,3 +155,39 @@ def test_a_run_under_nohup_ignores_sighup(folder):
     result = subprocess.run([sys.executable, "-c", script, *args], cwd=folder, capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert leftovers(folder) == [] and (folder / "a.csv").read_text().startswith("x,y")
+
+
+LOADING = """
+import builtins, os, signal, sys
+real = builtins.__import__
+def hooked(name, *args, **kwargs):
+    if name == sys.argv[1] and not getattr(hooked, "sent", False):
+        hooked.sent = True
+        os.kill(os.getpid(), signal.SIGINT)
+    return real(name, *args, **kwargs)
+builtins.__import__ = hooked
+from stipple.cli import main
+sys.argv = ["stipple"] + sys.argv[2:]
+main(prog_name="stipple")
+"""
+
+
+@pytest.mark.parametrize("module", ["click", "numpy"])
+def test_ctrl_c_while_the_commands_load_is_one_line(folder, module):
+    """Ctrl-C in the first 0.2 s, while ``stipple.cli`` imports click and numpy, gave a KeyboardInterrupt's
+    traceback (a hostile sweep): now the stopped run's line and 130, nothing written."""
+    before = snapshot(folder)
+    args = [module, "torus", "in.png", *FAST, *OUTPUTS]
+    result = subprocess.run([sys.executable, "-c", LOADING, *args], cwd=folder, capture_output=True, text=True)
+    assert result.returncode == 130, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "stipple: stopped by SIGINT; outputs are whole or untouched, no temporary file left"
+    ]
+    assert snapshot(folder) == before and leftovers(folder) == []
+
+
+def test_loading_the_commands_gives_back_the_callers_sigint_handler():
+    """The handler is the command line's only while it loads: a test runner or a library keeps its own."""
+    script = "import signal\nimport stipple.cli\nprint(signal.getsignal(signal.SIGINT) is signal.default_int_handler)"
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert result.stdout.strip() == "True", result.stderr

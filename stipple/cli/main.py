@@ -8,7 +8,6 @@ is one line.
 
 import os
 import re
-import signal
 import sys
 
 import click
@@ -22,6 +21,7 @@ from .evaluate import evaluate
 from .line import line
 from .render import render
 from .sphere import sphere
+from .stopped import stopped_line
 from .supervise import SIGNALS, Interrupted
 from .torus import torus
 from .video import video
@@ -64,8 +64,7 @@ class StippleGroup(click.Group):
             _error_line(f"Error: {error.strerror or error}" + (f": {error.filename}" if error.filename else ""))
             sys.exit(1)
         except Interrupted as interruption:
-            name = signal.Signals(interruption.number).name
-            _error_line(f"stipple: stopped by {name}; outputs are whole or untouched, no temporary file left")
+            _error_line(stopped_line(interruption.number))
             sys.exit(128 + interruption.number)
         sys.exit(code if isinstance(code, int) else 0)
 
