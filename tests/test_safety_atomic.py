@@ -280,3 +280,15 @@ def test_outputs_and_checkpoints_are_written_through_symbolic_links(folder):
     assert invoke([*resumed, "--checkpoint", "run.npz", "--resume"], folder).exit_code == 0
     assert (folder / "run.npz").is_symlink() and (folder / "sub" / "run.npz").read_bytes() != written
     assert leftovers(folder) == [] and leftovers(folder / "sub") == []
+
+
+@pytest.mark.parametrize("role", [["-o", "loop.csv"], ["-o", "a.csv", "--checkpoint", "loop.npz"]])
+def test_an_output_or_checkpoint_through_a_loop_of_links_is_refused(folder, role):
+    """A loop of links was replaced by a regular file, exit 0 (a hostile sweep); reading through one is refused."""
+    name = role[-1]
+    os.symlink("other" + name[4:], folder / name)
+    os.symlink(name, folder / ("other" + name[4:]))
+    before = snapshot(folder)
+    result = invoke(["torus", "in.png", *FAST, *role], folder)
+    assert result.exit_code == 1 and f"{name}: a loop of symbolic links" in result.stderr
+    assert snapshot(folder) == before and (folder / name).is_symlink() and leftovers(folder) == []

@@ -2,6 +2,7 @@
 checks made on output paths before a long run."""
 
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -79,8 +80,16 @@ def _check_name_length(path, directory):
 def through_links(path):
     """``path``, or the file its symbolic link names (followed to the end, even where that file does not exist
     yet): outputs and checkpoints are written through a link to its file. Renamed over the link, a resumed
-    checkpoint's link became a file of its own, and its file kept the old state for the next resume."""
-    return os.path.realpath(path) if os.path.islink(path) else path
+    checkpoint's link became a file of its own, and its file kept the old state for the next resume. A loop of
+    links is refused (it was replaced by a file: a hostile sweep)."""
+    if not os.path.islink(path):
+        return path
+    try:
+        os.stat(path)
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            raise StippleError(f"{path}: a loop of symbolic links (they never reach a file)") from None
+    return os.path.realpath(path)
 
 
 def make_folder(directory):
