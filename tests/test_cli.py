@@ -329,3 +329,10 @@ def test_evaluate_and_design_options_take_only_decimal_numbers(image_path, tmp_p
     assert result.exit_code == 2 and "'2_4' is not a whole number in decimal digits" in result.output
     result = run(["design", "-t", "\u0664", "-o", tmp_path / "d.csv"])
     assert result.exit_code == 2 and "is not a whole number in decimal digits" in result.output
+
+
+@pytest.mark.parametrize("command", [["torus"], ["sphere"], ["render"], ["evaluate"], ["video"]])
+def test_an_empty_input_name_is_named(tmp_path, command):
+    """``stipple torus "$UNSET"`` said "cannot read : No such file or directory" (a fifth sweep)."""
+    result = run([*command, "", "-o", tmp_path / "o.csv"] if command != ["evaluate"] else [*command, ""])
+    assert result.exit_code == 1 and "an empty file name (an unset shell variable?)" in result.output

@@ -74,13 +74,30 @@ def test_command_line_overrides_config(setup):
         ("points = '100'", "bad.toml: expected a number, not the text '100'"),
         ("gamma = '2'", "bad.toml: expected a number, not the text '2'"),
         ("range = ['0', '1']", "bad.toml: expected a number, not the text '0'"),
+        # A fifth sweep: list elements of any type, internal names, one option under two spellings.
+        ("output = [['a.csv']]", "key 'output' in " + "{folder}/bad.toml: expected text, not list ['a.csv']"),
+        ("output = ['a.csv', 5]", "expected text, not int 5"),
+        ("n_points = 30", "unknown key 'n_points'"),
+        ("outputs = ['a.csv']", "unknown key 'outputs'"),
+        ("value_range = [0, 1]", "unknown key 'value_range'"),
+        ("settle = 0.01\nchecked = 1", "unknown key 'checked'"),
+        ("checkpoint-every = 10\ncheckpoint_every = 20", "keys 'checkpoint-every' and 'checkpoint_every' in"),
     ],
 )
 def test_config_errors_name_the_key(setup, line, message):
     config = write_config(setup / "bad.toml", f'input = "inputs/ramp.png"\n{line}\n')
     result = run(["torus", "--config", config])
     assert result.exit_code == 2
-    assert message in result.output
+    assert message.format(folder=setup) in result.output
+
+
+@pytest.mark.parametrize("key", ["output", "input", "init", "checkpoint"])
+def test_an_empty_path_in_a_config_is_an_empty_file_name(setup, key):
+    """An empty path became the config's folder: "/…/cfg/: is a directory" (a fifth sweep)."""
+    lines = {"input": 'input = "inputs/ramp.png"', "output": 'output = "o.csv"', key: f'{key} = ""'}
+    config = write_config(setup / "c.toml", "\n".join(lines.values()) + "\npoints = 40\niterations = 2\n")
+    result = run(["torus", "--config", config])
+    assert result.exit_code in (1, 2) and "an empty file name" in result.output + str(result.exception)
 
 
 def test_broken_toml(setup):

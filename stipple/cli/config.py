@@ -6,7 +6,6 @@ import tomllib
 
 import click
 
-CONFIG_ALIASES = {"points": "n_points", "output": "outputs", "range": "value_range", "input": None}
 PATH_KEYS = ("outputs", "init", "checkpoint")
 MAX_CONFIG_BYTES = 1 << 20
 
@@ -23,26 +22,41 @@ def load_config(ctx, param, value):
     table = _read_table(value, ctx, param)
     ctx.meta["stipple.config"] = value
     base = os.path.dirname(os.path.abspath(value))
-    parameters = {p.name: p for p in ctx.command.params if p.name != "config"}
-    defaults = {}
+    options = config_keys(ctx.command)
+    defaults, keys = {}, {}
     for key, item in table.items():
-        name = CONFIG_ALIASES.get(key, key.replace("-", "_"))
         if key == "input":
             if not isinstance(item, str):
                 raise click.BadParameter(f"key 'input' in {value}: expected a path or builtin:NAME", ctx, param)
             defaults["input"] = _resolve_paths(base, item)
             continue
-        if name not in parameters or isinstance(parameters[name], click.Argument):
+        if key not in options:
             raise click.BadParameter(f"unknown key {key!r} in {value}", ctx, param)
-        if isinstance(item, bool) != getattr(parameters[name], "is_flag", False):
+        option = options[key]
+        if option.name in keys:  # frame-iterations and frame_iterations, both in one table
+            raise click.BadParameter(f"keys {keys[option.name]!r} and {key!r} in {value} are one option", ctx, param)
+        keys[option.name] = key
+        if isinstance(item, bool) != getattr(option, "is_flag", False):
             raise click.BadParameter(f"key {key!r} in {value}: wrong type {type(item).__name__}", ctx, param)
-        item = _shaped(parameters[name], item, f"key {key!r} in {value}", ctx, param)
-        converted = _convert(parameters[name], item, f"key {key!r} in {value}", ctx, param)
-        if name in PATH_KEYS:
+        item = _shaped(option, item, f"key {key!r} in {value}", ctx, param)
+        converted = _convert(option, item, f"key {key!r} in {value}", ctx, param)
+        if option.name in PATH_KEYS:
             converted = _resolve_paths(base, converted)
-        defaults[name] = converted
+        defaults[option.name] = converted
     ctx.default_map = {**(ctx.default_map or {}), **defaults}
     return value
+
+
+def config_keys(command):
+    """A config file's keys -> ``command``'s options: each long option name, with ``-`` or ``_`` (``points``,
+    ``frame-iterations``, ``frame_iterations``); not the options' internal names (``n_points`` was taken)."""
+    keys = {}
+    for parameter in command.params:
+        if isinstance(parameter, click.Option) and parameter.name != "config":
+            for name in parameter.opts:
+                if name.startswith("--"):
+                    keys[name[2:]] = keys[name[2:].replace("-", "_")] = parameter
+    return keys
 
 
 def _read_table(path, ctx, param):
@@ -77,6 +91,9 @@ def _convert(parameter, item, where, ctx, param):
     """``item`` converted by the option's own type; floats for integer options and non-finite numbers refused."""
     expects_integer = isinstance(parameter.type, click.types.IntParamType)
     for number in item if isinstance(item, list) else [item]:
+        if isinstance(number, (list, dict)) or (parameter.name in PATH_KEYS and not isinstance(number, str)):
+            # output = [["a.csv"]] was read as the file "['a.csv']", output = ["a.csv", 5] as a file "5" (a sweep)
+            raise click.BadParameter(f"{where}: expected text, not {type(number).__name__} {number!r}", ctx, param)
         if isinstance(number, str) and _numeric(parameter.type) and _number_text(number):
             # points = "100" passed (docs/errors.md: numbers, not text); a word such as "auto" is the type's to judge
             raise click.BadParameter(f"{where}: expected a number, not the text {number!r}", ctx, param)
@@ -112,5 +129,6 @@ def _resolve_paths(base, value):
     if isinstance(value, tuple):
         return tuple(_resolve_paths(base, item) for item in value)
     keywords = ("-", "stratified", "density", "uniform", "auto", "lattice")
-    keep = value is None or value in keywords or value.startswith("builtin:")
+    # An empty name stays empty, for the command's own "an empty file name" (it became the config's folder).
+    keep = value is None or value in ("", *keywords) or value.startswith("builtin:")
     return value if keep or os.path.isabs(value) else os.path.join(base, value)

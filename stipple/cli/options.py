@@ -379,6 +379,8 @@ def init_input(init, starts=INITS):
     it is neither a start nor an existing file (``--init stratifed`` said only that the file did not exist)."""
     if init in starts:
         return None
+    if init == "":
+        raise StippleError("--init: an empty file name (an unset shell variable?)")
     if str(init) != "-" and not os.path.exists(init):
         raise StippleError(f"--init: {init!r} is neither a start ({', '.join(starts)}) nor an existing file")
     return ("--init file", init)

@@ -52,6 +52,8 @@ def read_source(source, limit=None):
     """
     name = str(getattr(source, "name", source))
     limit = MAX_INPUT_BYTES if limit is None else limit
+    if name == "":
+        raise StippleError("an empty file name (an unset shell variable?)")  # "cannot read : No such file"
     try:
         if hasattr(source, "read"):
             return _read_bounded(source, limit, name)

@@ -143,6 +143,8 @@ def _load(path, invert, gamma, levels, colour=False, value_range=None):
 
 
 def _open_video(source, selection):
+    if source == "":
+        raise StippleError("an empty file name (an unset shell variable?)")
     if not os.path.exists(source):
         raise StippleError(f"{source}: no such file, folder or matching frame images")
     if os.path.splitext(source)[1].lower() in FRAME_EXTENSIONS:
