@@ -336,3 +336,13 @@ def test_an_empty_input_name_is_named(tmp_path, command):
     """``stipple torus "$UNSET"`` said "cannot read : No such file or directory" (a fifth sweep)."""
     result = run([*command, "", "-o", tmp_path / "o.csv"] if command != ["evaluate"] else [*command, ""])
     assert result.exit_code == 1 and "an empty file name (an unset shell variable?)" in result.output
+
+
+@pytest.mark.parametrize("command", ["torus", "colour", "line", "video"])
+def test_a_builtin_density_given_to_an_image_command_is_named(tmp_path, command):
+    """``stipple torus builtin:gaussians`` said "No such file or directory" (a fifth sweep)."""
+    result = run([command, "builtin:gaussians", "-M", 100, "-o", tmp_path / "o.csv"])
+    assert result.exit_code == 1
+    assert "builtin:gaussians: the built-in densities are the sphere's ('stipple sphere builtin:gaussians')" in (
+        result.output
+    )

@@ -59,8 +59,18 @@ def read_source(source, limit=None):
             return _read_bounded(source, limit, name)
         with open(source, "rb") as handle:
             return _read_bounded(handle, limit, name)
+    except FileNotFoundError as error:
+        raise StippleError(missing_file(name, error)) from None
     except OSError as error:
         raise StippleError(f"cannot read {name}: {error.strerror or error}") from None
+
+
+def missing_file(name, error=None):
+    """The message for an input ``name`` that does not exist; ``builtin:NAME`` names a sphere's density (``torus
+    builtin:gaussians`` was "No such file or directory": a fifth sweep)."""
+    if name.startswith("builtin:"):
+        return f"{name}: the built-in densities are the sphere's ('stipple sphere {name}'); give an image file here"
+    return f"cannot read {name}: {getattr(error, 'strerror', None) or 'No such file or directory'}"
 
 
 def _read_bounded(stream, limit, name):
