@@ -18,11 +18,11 @@ import numpy as np
 
 from .checks import MAX_ITERATIONS
 from .errors import StippleError
-from .io.archive import MemberReader, open_archive
+from .io.archive import STILL_CHECKPOINT, VIDEO_CHECKPOINT, MemberReader, open_archive
 from .io.commit import atomic_write
 from .optimize import CGState
 
-FORMAT = "stipple-checkpoint"
+FORMAT = STILL_CHECKPOINT
 VERSION = 1
 ARRAYS = ("points", "gradient", "direction", "energies", "gradient_norms")
 SCALARS = ("iteration", "gradient_curvature", "direction_curvature", "initial_gradient_norm")
@@ -170,6 +170,8 @@ def _metadata(path, text):
         metadata = json.loads(text)
     except (TypeError, ValueError, RecursionError):
         raise StippleError(f"{path}: corrupt checkpoint metadata") from None
+    if isinstance(metadata, dict) and metadata.get("format") == VIDEO_CHECKPOINT:
+        raise StippleError(f"{path}: checkpoint is of a stipple video run, not of this one")
     if not isinstance(metadata, dict) or metadata.get("format") != FORMAT:
         raise StippleError(f"{path}: not a stipple checkpoint")
     saved_version = metadata.get("version")

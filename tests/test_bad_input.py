@@ -317,6 +317,22 @@ def test_resume_refuses_another_kernel_or_domain(files):
     assert "checkpoint is of a stipple sphere or design run, not of this one" in text
 
 
+def test_a_still_and_a_video_checkpoint_name_each_other(files):
+    """A video's checkpoint given to ``stipple torus`` was "not a stipple checkpoint" (a fifth sweep)."""
+    folder, image, output = files
+    (folder / "frames").mkdir()
+    for index in range(2):
+        Image.open(image).save(folder / "frames" / f"{index}.png")
+    video = ["video", folder / "frames", "-M", 30, "-N", 8, "--iterations", 2, "-q", "-o", folder / "v.csv"]
+    still = ["torus", image, "-M", 30, "-N", 8, "--iterations", 2, "-q", "-o", output]
+    assert CliRunner().invoke(main, [str(a) for a in [*video, "--checkpoint", folder / "v.npz"]]).exit_code == 0
+    assert CliRunner().invoke(main, [str(a) for a in [*still, "--checkpoint", folder / "s.npz"]]).exit_code == 0
+    text = invoke([*still, "--checkpoint", folder / "v.npz", "--resume"])
+    assert "v.npz: checkpoint is of a stipple video run, not of this one" in text
+    text = invoke([*video, "--checkpoint", folder / "s.npz", "--resume"])
+    assert "s.npz: checkpoint is of a still's run (stipple torus, sphere, colour, line or design)" in text
+
+
 @pytest.mark.parametrize("command", ["torus", "video"])
 def test_a_checkpoint_that_is_not_a_regular_file_is_refused(files, tmp_path, command):
     """A zip reader read /dev/zero to its end (17.6 GB in 40 s, then killed) and waited on a FIFO for ever."""

@@ -9,6 +9,9 @@ from .sources import check_regular_file
 
 # Room for a member's ``.npy`` header besides its data.
 NPY_HEADER_ALLOWANCE = 1 << 12
+# The checkpoints' formats, a still's run's (``stipple.checkpoint``) and a video's (``video_checkpoint``): each
+# reader names the other's files as such.
+STILL_CHECKPOINT, VIDEO_CHECKPOINT = "stipple-checkpoint", "stipple-video-checkpoint"
 
 
 def open_archive(path):

@@ -9,7 +9,7 @@ import zipfile
 import numpy as np
 
 from ..errors import StippleError
-from .archive import MemberReader, open_archive
+from .archive import STILL_CHECKPOINT, VIDEO_CHECKPOINT, MemberReader, open_archive
 from .commit import atomic_write
 from .mp4 import error_reason
 
@@ -19,7 +19,7 @@ def frame_fingerprint(density):
     return hashlib.sha256(np.ascontiguousarray(density, dtype=np.float64).tobytes()).hexdigest()
 
 
-CHECKPOINT_FORMAT = "stipple-video-checkpoint"
+CHECKPOINT_FORMAT = VIDEO_CHECKPOINT
 CHECKPOINT_VERSION = 1
 MAX_METADATA_BYTES = 1 << 24
 
@@ -68,6 +68,8 @@ def _checkpoint_metadata(path, text):
         metadata = json.loads(str(text[()]))
     except (TypeError, ValueError, RecursionError):
         raise StippleError(f"{path}: damaged video checkpoint metadata") from None
+    if isinstance(metadata, dict) and metadata.get("format") == STILL_CHECKPOINT:
+        raise StippleError(f"{path}: checkpoint is of a still's run (stipple torus, sphere, colour, line or design)")
     if not isinstance(metadata, dict) or metadata.get("format") != CHECKPOINT_FORMAT:
         raise StippleError(f"{path}: not a video checkpoint")
     if metadata.get("version") != CHECKPOINT_VERSION:
