@@ -190,7 +190,7 @@ def _metadata(path, text):
 
 
 def _check_matches(path, metadata, problem):
-    saved, current = metadata["settings"], problem.settings
+    saved, current = _as_given(metadata["settings"]), _as_given(problem.settings)
     # Over both sides' keys: a colour run's classes and a progressive run's order are missing from the other's.
     differ = [key for key in {**saved, **current} if saved.get(key) != current.get(key)]
     if "domain" in differ:
@@ -201,9 +201,9 @@ def _check_matches(path, metadata, problem):
         # The option that was changed, before the settings it changes with it (-N follows -M and --length).
         differ.sort(key=_naming_order)
         what = SETTING_NAMES.get(differ[0], differ[0])
-        if differ[0] in ("points", "shape"):
-            # A line's points are its quadrature nodes, which --length changes too (a hostile sweep was told -M).
-            what = {"sphere": "the map, -M or a design's -t", "line": "the image, -M or --length"}.get(
+        if differ[0] in ("points", "shape") or (differ[0] == "length" and saved.get("domain") == "line"):
+            # A line's length, nodes and padded image follow both the image and --length (its -M is "vertices").
+            what = {"sphere": "the map, -M or a design's -t", "line": "the image or --length"}.get(
                 saved.get("domain"), "the image or -M"
             )
         details = "; ".join(f"{key} was {_short(saved.get(key))}, now {current.get(key)!r}" for key in differ[:2])
@@ -221,7 +221,7 @@ def _check_matches(path, metadata, problem):
 # options first, the settings they change after them (FIRST_NAMED, then any other, then LAST_NAMED).
 SETTING_NAMES = {
     "bandwidth": "-N (the bandwidth; without -N it follows the image, its --invert, --gamma or --levels, and -M)",
-    "length": "--length (the line's length)",
+    "vertices": "-M (the line's vertices)",
     "separation": "--palette",
     "black": "--black",
     "classes": "--palette or --black (the inks)",
@@ -238,7 +238,18 @@ SETTING_NAMES = {
     "margin": "the line's blank margin (it follows --length)",
     "exclude": "the line's near field (it follows -N and --length)",
 }
-FIRST_NAMED = ["separation", "black", "classes", "order", "points", "shape", "length", "kernel", "near_field"]
+FIRST_NAMED = [
+    "separation",
+    "black",
+    "classes",
+    "order",
+    "vertices",
+    "length",
+    "points",
+    "shape",
+    "kernel",
+    "near_field",
+]
 LAST_NAMED = [
     "term_weights",
     "class_points",
@@ -250,6 +261,15 @@ LAST_NAMED = [
     "margin",
     "exclude",
 ]
+
+
+def _as_given(settings):
+    """``settings`` with a line's vertices, its nodes over their subdivisions: the -M a message names (a changed
+    --length was reported as "points was 900, now 300", its nodes, which read as -M: a fifth sweep)."""
+    nodes, subdivisions = settings.get("points"), settings.get("subdivisions")
+    if settings.get("domain") != "line" or not isinstance(nodes, int) or not isinstance(subdivisions, int):
+        return settings
+    return {"vertices": nodes // max(subdivisions, 1), **settings}
 
 
 def _naming_order(key):

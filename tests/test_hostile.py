@@ -273,11 +273,11 @@ def test_row10_resume_with_another_image_or_M_says_so(grad64, tmp_path):
     base = ["line", grad64, "--iterations", "2", "-q", "-o", output, "--checkpoint", checkpoint]
     assert stipple(*base, "-M", "300").returncode == 0
     # A line's points are its nodes, which --length changes too (tests/test_safety_sweep3.py).
-    one_line(stipple(*base, "-M", "200", "--resume"), 1, "the image, -M or --length differs")
+    one_line(stipple(*base, "-M", "200", "--resume"), 1, "-M (the line's vertices) differs (vertices was 300, now 200")
     small = tmp_path / "small.png"
     Image.open(grad64).resize((32, 32)).save(small)
     base[1] = small
-    one_line(stipple(*base, "-M", "300", "--resume"), 1, "the image, -M or --length differs")
+    one_line(stipple(*base, "-M", "300", "--resume"), 1, "the image or --length differs (length was")
 
 
 # Rows 11 and 12: --invert and --levels auto named.

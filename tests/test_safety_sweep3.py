@@ -96,7 +96,9 @@ def test_resuming_a_line_with_another_length_names_the_length(tmp_path):
     base = ["line", "in.png", "-M", 60, "--iterations", 2, "-q", "-o", "a.csv", "--checkpoint", "c.npz"]
     assert invoke([*base, "--length", 600], tmp_path).exit_code == 0
     result = invoke([*base, "--length", 300, "--resume"], tmp_path)
-    assert result.exit_code == 1 and "--length" in result.stderr and "Traceback" not in result.output
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    # Not "points was 240, now 120", which read as -M (a fifth sweep): the length the user gave.
+    assert "the image or --length differs (length was 600.0, now 300.0; " in result.stderr
 
 
 def test_hidden_files_in_a_folder_of_frames_are_not_frames(tmp_path):
