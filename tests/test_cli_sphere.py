@@ -271,3 +271,26 @@ def test_a_blank_image_as_a_map_is_named(tmp_path):
         main, ["sphere", str(tmp_path / "clear.png"), "-M", "20", "-q", "-o", str(tmp_path / "a.csv")]
     )
     assert result.exit_code == 1 and "clear.png: the image is blank (all white)" in result.output
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["sphere", "--uniform", "-M", "60", "--iterations", "2", "-o", "{out}/x.csv", "--view", "10,10"],
+        ["design", "-t", "4", "-o", "{out}/d.csv", "--projection", "equirect"],
+        ["render", "{torus}", "-o", "{out}/r.png", "--view", "0,0"],
+    ],
+)
+def test_view_and_projection_where_no_sphere_is_drawn_are_refused(tmp_path, arguments):
+    """They were taken and ignored: CSV outputs only, or torus points (a fifth sweep)."""
+    from click.testing import CliRunner
+
+    from stipple.cli import main
+
+    torus = tmp_path / "t.csv"
+    torus.write_text("x,y\n1,2\n3,4\n")
+    words = [word.format(out=tmp_path, torus=torus) for word in arguments]
+    result = CliRunner().invoke(main, words)
+    assert result.exit_code == 1
+    assert "for a picture of the sphere (.png or .svg); here it would be ignored" in result.output
+    assert not any(path.name in ("x.csv", "d.csv", "r.png") for path in tmp_path.iterdir())

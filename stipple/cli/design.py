@@ -9,6 +9,7 @@ from ..errors import StippleError
 from ..render.styles import PROJECTIONS
 from .options import (
     apply_options,
+    check_view_drawn,
     config_option,
     init_input,
     output_options,
@@ -97,6 +98,7 @@ def design(ctx, **options):
             raise StippleError(f"error must be a number in (0, 1), not {options['error']!r}")
         settings = render_settings(options)
         view = parse_view(options["view"], options["projection"])
+        check_view_drawn(ctx, [output_format(path) for path in options["outputs"]])
         inputs = [init_input(options["init"], STARTS)]
         with guarded_files([i for i in inputs if i], options["outputs"], options["checkpoint"]):
             epsilon = DESIGN_EPSILON if options["epsilon"] is None else options["epsilon"]

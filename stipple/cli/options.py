@@ -367,6 +367,17 @@ def given_on_command_line(ctx, name):
     return ctx is not None and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
 
 
+def check_view_drawn(ctx, formats, drawn=True, names=("view", "projection")):
+    """Refuse ``--view`` and ``--projection`` (``names``) given on the command line where no picture of the sphere
+    is drawn: no .png or .svg output, or (``drawn`` False) torus points; they would be ignored (a fifth sweep).
+    ``stipple sphere``'s pen dots are placed for their size in the projection's picture, which it keeps."""
+    given = [f"--{name}" for name in names if given_on_command_line(ctx, name)]
+    if given and not (drawn and {".png", ".svg"} & set(formats)):
+        raise StippleError(
+            f"{' and '.join(given)}: for a picture of the sphere (.png or .svg); here it would be ignored"
+        )
+
+
 def check_longitude(name, value):
     """A finite longitude in [-360, 360] degrees."""
     if not -360 <= value <= 360:

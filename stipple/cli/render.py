@@ -5,7 +5,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import look_options, parse_levels, parse_view, render_settings, warn_beyond
+from .options import check_view_drawn, look_options, parse_levels, parse_view, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
 from .values import FiniteFloatRange, IntegerRange, Number, some_output
 
@@ -118,6 +118,7 @@ def render(
                         "--like and --size are for torus points (an image's x,y); sphere points are drawn with "
                         "even dots: for a map's tone, give stipple sphere the outputs"
                     )
+                check_view_drawn(click.get_current_context(), formats)
                 layers = sphere_png_layers(projection, (settings["color"], settings["background"]))
                 check_png_outputs(formats, sphere_canvas(projection), png_width, len(points), layers)
                 points = plot_order(points, points, options, "radians")
@@ -127,6 +128,7 @@ def render(
                 )
                 write_outputs(outputs, files, options["quiet"])
                 return
+            check_view_drawn(click.get_current_context(), formats, drawn=False)
             shape, darkness, wrapped = torus_canvas(points, like, size, {"invert": options["invert"], **transfer})
             if darkness is not None:  # the ink a pen's dots carry, as the run drew them
                 darkness = placement_density(darkness, len(points), settings)

@@ -9,6 +9,7 @@ from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
 from .options import (
     check_longitude,
+    check_view_drawn,
     click_error,
     common_options,
     init_input,
@@ -83,6 +84,7 @@ def sphere(ctx, map_source, **options):
         layout = None if options["uniform"] or str(map_source).startswith("builtin:") else lon0
         view = parse_view(options["view"] or default_view(options["projection"], layout), options["projection"])
         formats = [output_format(path) for path in options["outputs"]]
+        check_view_drawn(ctx, formats, names=("view",))
         projection = options["projection"]
         layers = sphere_png_layers(projection, (settings["color"], settings["background"]))
         check_png_outputs(formats, sphere_canvas(projection), options["png_width"], options["n_points"], layers)
