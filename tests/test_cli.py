@@ -346,3 +346,21 @@ def test_a_builtin_density_given_to_an_image_command_is_named(tmp_path, command)
     assert "builtin:gaussians: the built-in densities are the sphere's ('stipple sphere builtin:gaussians')" in (
         result.output
     )
+
+
+@pytest.mark.parametrize(
+    "option, value, message",
+    [
+        ("--color", "#ff000080", "color must be an opaque colour (no alpha"),
+        ("--background", "", "background must be a colour such as"),
+        ("--color", " ", "color must be a colour such as"),
+    ],
+)
+def test_colours_with_alpha_or_empty_are_refused(image_path, tmp_path, option, value, message):
+    """The alpha was dropped and an empty colour meant the default, without a word (a fifth sweep)."""
+    result = run(["torus", image_path, "-M", 50, "-N", 12, "--iterations", 2, "-o", tmp_path / "o.svg", option, value])
+    assert result.exit_code == 1 and message in result.output and not (tmp_path / "o.svg").exists()
+    fine = run(["torus", image_path, "-M", 50, "-N", 12, "--iterations", 2, "-o", tmp_path / "o.svg", option, "#f00"])
+    assert fine.exit_code == 0
+    if option == "--color":
+        assert 'fill="#ff0000"' in (tmp_path / "o.svg").read_text()

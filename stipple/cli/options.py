@@ -317,8 +317,9 @@ def render_settings(options):
 
     invert = bool(options.get("invert"))
     background, color = options.get("background"), options.get("color")
-    background = parse_colour(background, "background") if background else (BLACK if invert else WHITE)
-    color = parse_colour(color, "color") if color else (WHITE if invert else BLACK)
+    # None: not given; an empty text is refused by parse_colour (it meant the default without a word: a sweep)
+    background = parse_colour(background, "background") if background is not None else (BLACK if invert else WHITE)
+    color = parse_colour(color, "color") if color is not None else (WHITE if invert else BLACK)
     if color == background:  # --invert --background white drew white dots on white: a blank picture
         raise StippleError(
             f"the dots (--color{', white under --invert' if invert and not options.get('color') else ''}) and the "

@@ -62,5 +62,8 @@ def parse_colour(text, name="color"):
         raise StippleError(f"{name} must be a colour such as #1a2b3c, #fff or white, not {text!r}") from None
     # Pillow passes rgb(999,2,3) and hsl(720,200%,50%) through out of range; an SVG then got fill="#3e70203".
     if not all(0 <= channel <= 255 for channel in rgb):
-        raise StippleError(f"{name} must be a colour with channels from 0 to 255, not {text!r} ({rgb})")
+        raise StippleError(f"{name} must be a colour with channels from 0 to 255, not {text!r}")
+    # #ff000080 and rgba(): the alpha was dropped without a word (a fifth sweep); inks and paper are opaque.
+    if len(rgb) == 4 and rgb[3] != 255:
+        raise StippleError(f"{name} must be an opaque colour (no alpha: inks and paper are drawn opaque), not {text!r}")
     return tuple(channel / 255 for channel in rgb[:3])
