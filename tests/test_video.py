@@ -796,6 +796,16 @@ def test_the_frame_number_goes_in_the_file_name_not_a_folder(tmp_path, pattern):
     assert check_frame_pattern("100%%/f_%d.png") == "100%%/f_%d.png"  # a literal '%' in a folder is fine
 
 
+@pytest.mark.parametrize("name", ["vo/%03d.csv", "%d.mp4"])
+def test_a_frame_number_in_a_csv_or_mp4_name_is_refused(name):
+    """'vo/%03d.csv' was written under that very name (a fifth sweep): one CSV or MP4 holds every frame."""
+    from stipple.io.video import plan_outputs
+
+    with pytest.raises(StippleError, match="holds every frame; a %d pattern is for one PNG or SVG per frame"):
+        plan_outputs([name])
+    assert plan_outputs(["100%%.csv", "-"])["csv"] == ["100%%.csv", "-"]  # a literal name otherwise
+
+
 def test_npy_frames_share_one_stretch_so_a_fading_map_fades(tmp_path):
     """Each .npy frame was stretched to its own least and greatest value: a ramp fading to nearly even (0.9-1.0)
     was stippled as the same ramp, and --range was refused (a hostile review). One stretch for the clip now; the

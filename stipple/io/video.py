@@ -270,6 +270,11 @@ def plan_outputs(outputs):
         if extension in PATTERN_EXTENSIONS:
             plan["frames"].append(check_frame_pattern(path))
         elif extension in (".csv", ".mp4"):
+            if _FIELD.search(str(path).replace("%%", "")):  # 'vo/%03d.csv' was written under that very name
+                raise StippleError(
+                    f"{path}: one {extension[1:].upper()} holds every frame; a %d pattern is for one PNG or SVG "
+                    "per frame (e.g. frames/%04d.png)"
+                )
             plan[extension[1:]].append(str(path))
         else:
             raise StippleError(
