@@ -114,6 +114,15 @@ def test_an_output_that_is_a_folder_is_refused_before_any_work(images, tmp_path)
     assert sorted(os.listdir(out)) == ["disc.png"]
 
 
+def test_an_output_folder_that_is_a_loop_of_links_is_named(images, tmp_path):
+    """It said "cannot make the output folder (File exists)" (a fifth sweep)."""
+    os.symlink(tmp_path / "b", tmp_path / "a")
+    os.symlink(tmp_path / "a", tmp_path / "b")
+    result = run(["batch", *images, "-d", tmp_path / "a", *SMALL, "-q"])
+    assert result.exit_code == 1 and "a: a symbolic link to no folder (dangling, or a loop of links)" in result.stderr
+    assert (tmp_path / "a").is_symlink() and (tmp_path / "b").is_symlink()
+
+
 def test_an_output_that_cannot_be_written_fails_that_image_only(images, tmp_path, monkeypatch):
     out = tmp_path / "out"
     commit = batch_module.commit_outputs

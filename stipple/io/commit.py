@@ -96,6 +96,8 @@ def make_folder(directory):
     """Make the output folder ``directory`` (and its missing parents) unless it exists, then ``check_folder`` it.
     A missing folder is refused where the nearest existing one above it is read-only by its mode, as
     ``check_writable`` refuses a file there, even for root (who could write into it: a hostile sweep)."""
+    if os.path.islink(directory) and not os.path.exists(directory):  # "cannot make ... (File exists)": a sweep
+        raise StippleError(f"{directory}: a symbolic link to no folder (dangling, or a loop of links)")
     if not os.path.isdir(directory):
         above = os.path.dirname(os.path.abspath(directory))
         while not os.path.exists(above):
