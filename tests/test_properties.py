@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from stipple.cli.options import parse_view
 from stipple.cli.supervise import parse_every
+from stipple.cli.views import parse_view
 from stipple.errors import StippleError
 from stipple.io.images import NPY_MAGIC, load_density
 from stipple.io.points import csv_bytes, read_points_csv

@@ -9,11 +9,9 @@ from ..errors import StippleError
 from ..render.styles import PROJECTIONS
 from .options import (
     apply_options,
-    check_view_drawn,
     config_option,
     init_input,
     output_options,
-    parse_view,
     render_settings,
     run_options,
     session_options,
@@ -21,6 +19,7 @@ from .options import (
 )
 from .supervise import finish, guarded_files, solve, write_outputs
 from .values import Integer, Number, checked_count
+from .views import check_view_drawn, parse_view
 
 # The exit code of a run that ended without reaching --error (its points are written).
 NOT_A_DESIGN = 3

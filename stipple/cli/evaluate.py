@@ -10,9 +10,10 @@ from ..errors import MissingInput, StippleError
 from ..io.commit import commit_outputs
 from ..io.sources import PICTURE_EXTENSIONS
 from .defaults import DEFAULT_LIFT, DEFAULT_SPEED, DEFAULT_TRAVEL_SPEED, MAX_POINTS
-from .options import check_extension, check_longitude, click_error, given_on_command_line, parse_levels, warn_outside
+from .options import check_extension, click_error, given_on_command_line, parse_levels, warn_outside
 from .supervise import guarded_files
 from .values import FiniteFloatRange, Integer, IntegerRange, Number
+from .views import check_longitude
 
 
 @click.command()

@@ -5,9 +5,10 @@ import click
 from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
-from .options import check_view_drawn, look_options, parse_levels, parse_view, render_settings, warn_beyond
+from .options import look_options, parse_levels, render_settings, warn_beyond
 from .supervise import guarded_files, plot_order, write_outputs
 from .values import FiniteFloatRange, IntegerRange, Number, some_output
+from .views import check_view_drawn, parse_view
 
 
 @click.command()

@@ -8,19 +8,17 @@ from ..errors import StippleError
 from ..io.commit import output_format
 from ..render.styles import PROJECTIONS
 from .options import (
-    check_longitude,
-    check_view_drawn,
     click_error,
     common_options,
     init_input,
     is_default,
-    parse_view,
     render_settings,
     resolve_input,
 )
 from .supervise import finish, guarded_files, plot_order, solve, write_outputs
 from .torus import peak_note
 from .values import Number
+from .views import check_longitude, check_view_drawn, parse_view
 
 
 @click.command()

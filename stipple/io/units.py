@@ -2,8 +2,6 @@
 
 import re
 
-from PIL import ImageColor
-
 from ..errors import StippleError
 
 UNITS = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
@@ -56,6 +54,8 @@ def hex_colour(colour):
 
 def parse_colour(text, name="color"):
     """``#rrggbb``, ``#rgb`` or a CSS colour name (``white``, ``navy``) -> RGB in [0, 1]."""
+    from PIL import ImageColor  # here: the command line loads this module, and not Pillow, for its numbers
+
     try:
         rgb = ImageColor.getrgb(str(text).strip())
     except ValueError:
