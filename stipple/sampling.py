@@ -98,26 +98,28 @@ def _cells_through_blocks(weights, order, level, fractions):
     cumulative = np.cumsum(blocks.ravel()[along_curve])
     targets = fractions * cumulative[-1]
     found = np.minimum(np.searchsorted(cumulative, targets, side="right"), blocks.size - 1)
-    before = np.where(found > 0, cumulative[found - 1], 0.0)
+    remainders = targets - np.where(found > 0, cumulative[found - 1], 0.0)
     block_row, block_column = np.divmod(along_curve[found], blocks.shape[1])
+    return _cell_within(weights, order, side, block_row, block_column, remainders)
+
+
+def _cell_within(weights, order, side, block_row, block_column, remainders):
+    """Per block ``(block_row, block_column)`` of ``side x side`` cells, the flat index of the cell at which the
+    block's mass, along the Hilbert curve, first passes its remainder (its last inked cell where rounding left the
+    remainder at or above the block's mass)."""
+    rows, columns = weights.shape
     offset_row, offset_column = np.divmod(np.arange(side * side), side)
     row = block_row[:, None] * side + offset_row[None, :]
     column = block_column[:, None] * side + offset_column[None, :]
     inside = (row < rows) & (column < columns)
     row, column = np.where(inside, row, 0), np.where(inside, column, 0)
-    masses = np.where(inside, weights[row, column], 0.0)
+    cells = row * columns + column
     within = np.argsort(hilbert_index(column.ravel(), row.ravel(), order).reshape(row.shape), axis=1, kind="stable")
-    masses = np.take_along_axis(masses, within, axis=1)
+    masses = np.take_along_axis(np.where(inside, weights[row, column], 0.0), within, axis=1)
     running = np.cumsum(masses, axis=1)
-    # The first cell whose running mass passes the target's remainder; the block's last inked cell where rounding
-    # left the remainder at or above the block's mass.
     last_inked = side * side - 1 - np.argmax(masses[:, ::-1] > 0, axis=1)
-    pick = np.minimum(np.sum(running <= (targets - before)[:, None], axis=1), last_inked)
-    picked = np.take_along_axis(within, pick[:, None], axis=1)[:, 0]
-    return (
-        np.take_along_axis(row, picked[:, None], axis=1)[:, 0] * columns
-        + np.take_along_axis(column, picked[:, None], axis=1)[:, 0]
-    )
+    pick = np.minimum(np.sum(running <= remainders[:, None], axis=1), last_inked)
+    return np.take_along_axis(np.take_along_axis(cells, within, axis=1), pick[:, None], axis=1)[:, 0]
 
 
 def _cells_at(weights, cell_order, fractions):
