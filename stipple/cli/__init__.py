@@ -11,7 +11,8 @@ from .stopped import stopped_line
 def _stopped_while_loading(number, frame):
     # Ctrl-C while the commands' modules load (0.2 s or more on a busy machine) gave a KeyboardInterrupt's traceback
     # (a hostile sweep); nothing has been written yet.
-    sys.stderr.write(stopped_line(number) + "\n")
+    if sys.stderr is not None:  # started without one: the exit status says it
+        sys.stderr.write(stopped_line(number) + "\n")
     sys.exit(128 + number)
 
 
