@@ -101,10 +101,36 @@ def exact_blurs(weights, points, sigma, threads=1):
     gaussian = np.exp(-2 * np.pi**2 * sigma**2 * ((n1 / columns) ** 2 + (n2 / rows) ** 2))
     nufft.set_points(np.mod(points, 1.0))
     dots = nufft.type1(np.ones((1, len(points)), dtype=np.complex128))[0] * (weights.mean() / len(points))
-    y, x = np.meshgrid((np.arange(rows) + 0.5) / rows, (np.arange(columns) + 0.5) / columns, indexing="ij")
-    nufft.set_points(np.stack([x.ravel(), y.ravel()], axis=1))
-    fields = nufft.type2(np.stack([gaussian * image_coefficients(weights, bandwidths), gaussian * dots]))
-    return fields[0].real.reshape(rows, columns), fields[1].real.reshape(rows, columns)
+    return tuple(
+        pixel_values(gaussian * coeffs, weights.shape).real
+        for coeffs in (image_coefficients(weights, bandwidths), dots)
+    )
+
+
+def pixel_values(coeffs, shape):
+    """``sum_n coeffs[n] exp(2 pi i n . p)`` at the centres ``p`` of the pixels of a ``shape = (H, W)`` grid, as an
+    ``(H, W)`` array, for a centred mode array ``coeffs`` of shape ``(N1+1, N2+1)`` (``n1`` along x): the modes
+    folded onto the grid, each alias ``n = k + m W`` with its sign ``(-1)^m`` at the half-pixel centres, then one
+    inverse FFT. Exact; the type-2 NUFFT at the 12 million centres of a phone's photo took most of evaluate's 75 s."""
+    rows, columns = shape
+    folded = _fold(_fold(coeffs, columns, axis=0), rows, axis=1)
+    folded = folded * np.exp(1j * np.pi * np.arange(columns) / columns)[:, None]
+    folded *= np.exp(1j * np.pi * np.arange(rows) / rows)[None, :]
+    return (np.fft.ifft2(folded) * (rows * columns)).T
+
+
+def _fold(modes, length, axis):
+    """The centred modes ``-N/2 .. N/2`` along ``axis`` summed onto ``0 .. length - 1`` by ``k = n mod length``,
+    each with the sign ``(-1)^((n - k) / length)``."""
+    modes = np.moveaxis(modes, axis, 0)
+    count, lowest = modes.shape[0], -(modes.shape[0] // 2)
+    blocks = -(-count // length)
+    padded = np.zeros((blocks * length, *modes.shape[1:]), dtype=np.complex128)
+    padded[:count] = modes
+    summed = np.tensordot((-1.0) ** np.arange(blocks), padded.reshape(blocks, length, *modes.shape[1:]), axes=1)
+    signs = (-1.0) ** np.floor_divide(lowest + np.arange(length), length)
+    summed *= signs.reshape(-1, *[1] * (modes.ndim - 1))
+    return np.moveaxis(np.roll(summed, lowest, axis=0), 0, axis)
 
 
 def image_similarity(weights, points, blurs=BLURS):
