@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 
 from .manifolds import Sphere
 from .optimize import minimize, time_left
-from .sampling import hilbert_index
+from .sampling import block_sums, hilbert_index
 from .transforms import spherical_angles
 
 # Dots per level: each coarser level has 1/RATIO of the dots of the next (4: half the spacing, half the N).
@@ -115,14 +115,10 @@ def _pixel_blocks(weights, block, scale):
     """``(centres, masses)`` of the ``block x block`` blocks of pixels (smaller along the far edges), a band of
     block rows at a time."""
     rows, columns = weights.shape
-    left = np.arange(0, columns, block)
-    centre_x = (left + np.minimum(left + block, columns)) / (2 * columns) * scale[0]
-    band = block * max(1, BAND_SAMPLES // len(left))
+    band = block * max(1, BAND_SAMPLES // -(-columns // block))
     for top in range(0, rows, band):
-        starts = np.arange(top, min(top + band, rows), block)
-        masses = np.add.reduceat(np.add.reduceat(weights[top : top + band], starts - top, axis=0), left, axis=1)
-        centre_y = (starts + np.minimum(starts + block, rows)) / (2 * rows) * scale[1]
-        xx, yy = np.meshgrid(centre_x, centre_y)
+        masses, (centre_y, centre_x) = block_sums(weights[top : top + band], block)
+        xx, yy = np.meshgrid(centre_x / columns * scale[0], (centre_y + top) / rows * scale[1])
         yield np.stack([xx.ravel(), yy.ravel()], axis=1), masses.ravel()
 
 

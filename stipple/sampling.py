@@ -48,6 +48,19 @@ def hilbert_index(x, y, order=16):
     return index
 
 
+def block_sums(values, block):
+    """``values`` summed over blocks of ``block x block`` cells (smaller along the last rows and columns), and each
+    axis's block centres in cells: ``(sums, (row_centres, column_centres))``; the sums are ``values`` itself for a
+    ``block`` of 1."""
+    starts = [np.arange(0, length, block) for length in values.shape]
+    centres = tuple(
+        (start + np.minimum(start + block, length)) / 2 for start, length in zip(starts, values.shape, strict=True)
+    )
+    if block > 1:
+        values = np.add.reduceat(np.add.reduceat(values, starts[0], axis=0), starts[1], axis=1)
+    return values, centres
+
+
 def sample_image(weights, rng, count):
     """``count`` i.i.d. points in [0, 1)² with density proportional to the pixel-constant ``weights``."""
     return _points_in_cells(weights, rng, _cells_at(weights, None, rng.random(count)))

@@ -9,7 +9,7 @@ from scipy.special import roots_legendre
 from .errors import StippleError
 from .io.images import check_grid
 from .manifolds import Sphere
-from .sampling import stratified_cells
+from .sampling import block_sums, stratified_cells
 from .torus_spectrum import cell_factor
 
 
@@ -77,12 +77,9 @@ class CellMap:
         blocks of ``block x block`` cells (smaller along the last rows and columns), each centred in colatitude
         and longitude."""
         rows, columns = self.values.shape
-        masses = self.values * self.cell_areas
-        top, left = np.arange(0, rows, block), np.arange(0, columns, block)
-        if block > 1:
-            masses = np.add.reduceat(np.add.reduceat(masses, top, axis=0), left, axis=1)
-        theta = (top + np.minimum(top + block, rows)) / 2 * np.pi / rows
-        phi = np.radians(self.lon0) + (left + np.minimum(left + block, columns)) / 2 * 2 * np.pi / columns
+        masses, (centre_rows, centre_columns) = block_sums(self.values * self.cell_areas, block)
+        theta = centre_rows * np.pi / rows
+        phi = np.radians(self.lon0) + centre_columns * 2 * np.pi / columns
         centres = unit_vectors(np.cos(theta)[:, None] + 0 * phi, phi[None, :] + 0 * theta[:, None])
         return centres.reshape(-1, 3), masses.ravel()
 
