@@ -5,6 +5,7 @@ import os
 import click
 
 from ..errors import MissingInput, StippleError
+from ..io.sources import EMPTY_NAME
 from ..io.units import parse_number
 from ..render.styles import DOT_STYLES, STYLES, check_dot_radius_style
 from .config import load_config
@@ -373,7 +374,7 @@ def init_input(init, starts=INITS):
     if init in starts:
         return None
     if init == "":
-        raise StippleError("--init: an empty file name (an unset shell variable?)")
+        raise StippleError(f"--init: {EMPTY_NAME}")
     if str(init) != "-" and not os.path.exists(init):
         raise StippleError(f"--init: {init!r} is neither a start ({', '.join(starts)}) nor an existing file")
     return ("--init file", init)

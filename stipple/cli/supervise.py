@@ -15,6 +15,7 @@ import click
 from ..errors import StippleError
 from ..io.commit import FORMATS, check_writable, commit_outputs, output_format, taken_signals
 from ..io.safety import CheckpointLock, check_distinct
+from ..io.sources import EMPTY_NAME
 from .defaults import MAX_ITERATIONS
 from .options import given_on_command_line
 
@@ -173,7 +174,7 @@ def guarded_files(inputs, outputs, checkpoint=None, reports=(), formats=FORMATS)
     if list(outputs).count("-") > 1:
         raise StippleError("'-' (stdout) may be given only once")
     if checkpoint is not None and not str(checkpoint).strip():  # found only when it was written, after the run
-        raise StippleError("--checkpoint: an empty file name (an unset shell variable?)")
+        raise StippleError(f"--checkpoint: {EMPTY_NAME}")
     if checkpoint is not None and str(checkpoint) == "-":
         raise StippleError("--checkpoint must name a file, not '-': a checkpoint is saved, replaced and resumed")
     piped = [role for role, path in inputs if path is not None and str(path) == "-"]

@@ -4,6 +4,7 @@ import math
 
 import click
 
+from ..io.sources import EMPTY_NAME
 from ..io.units import INTEGER, NUMBER
 from .defaults import MAX_POINTS
 
@@ -56,7 +57,7 @@ def some_output(ctx, param, outputs):
         raise click.BadParameter("no output: give one or more files, or '-' for stdout", ctx, param)
     for path in outputs:
         if not str(path).strip():
-            raise click.BadParameter("an empty file name (an unset shell variable?)", ctx, param)
+            raise click.BadParameter(EMPTY_NAME, ctx, param)
     return outputs
 
 

@@ -41,6 +41,11 @@ def source_or_stdin(source):
     return stdin_stream() if source == "-" else source
 
 
+# An empty path, most often a shell variable that was not set ("$OUT"): every command's inputs, outputs,
+# checkpoint and --init say it in these words.
+EMPTY_NAME = "an empty file name (an unset shell variable?)"
+
+
 def read_source(source, limit=None):
     """Bytes of ``source`` (a path, or a binary file object such as stdin), at most ``limit`` of them
     (default ``MAX_INPUT_BYTES``).
@@ -53,7 +58,7 @@ def read_source(source, limit=None):
     name = str(getattr(source, "name", source))
     limit = MAX_INPUT_BYTES if limit is None else limit
     if name == "":
-        raise StippleError("an empty file name (an unset shell variable?)")  # "cannot read : No such file"
+        raise StippleError(EMPTY_NAME)  # "cannot read : No such file"
     try:
         if hasattr(source, "read"):
             return _read_bounded(source, limit, name)

@@ -18,7 +18,7 @@ from .commit import StagedOutputs, write_stdout
 from .images import check_grid, image_colour, image_density, load_array, load_colour, load_density
 from .levels import auto_levels
 from .mp4 import Mp4Stream, error_reason, require_av
-from .sources import PICTURE_EXTENSIONS, check_regular_file, missing_file, read_source
+from .sources import EMPTY_NAME, PICTURE_EXTENSIONS, check_regular_file, missing_file, read_source
 
 # The still formats of a frame sequence (a GIF is read as a video), and .npy maps.
 FRAME_EXTENSIONS = tuple(extension for extension in PICTURE_EXTENSIONS if extension != ".gif") + (".npy",)
@@ -144,7 +144,7 @@ def _load(path, invert, gamma, levels, colour=False, value_range=None):
 
 def _open_video(source, selection):
     if source == "":
-        raise StippleError("an empty file name (an unset shell variable?)")
+        raise StippleError(EMPTY_NAME)
     if not os.path.exists(source):
         if source.startswith("builtin:"):
             raise StippleError(missing_file(source))
