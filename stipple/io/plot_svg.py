@@ -29,7 +29,6 @@ MM_PER = {**UNITS, "pc": 25.4 / 6, "": UNITS["px"]}  # SVG lengths: the options'
 SVG = "{http://www.w3.org/2000/svg}"
 INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
 SKIPPED = {"defs", "metadata", "title", "desc", "style", "clipPath", "mask", "symbol", "marker", "pattern"}
-NUMBER = DECIMAL
 
 
 @dataclass
@@ -99,7 +98,7 @@ def _tag(element):
 
 def length_mm(text, default_unit=""):
     """Millimetres of an SVG length such as ``200mm``, ``8in`` or ``800`` (CSS pixels)."""
-    match = re.fullmatch(rf"\s*({NUMBER})\s*(mm|cm|in|px|pt|pc)?\s*", text or "")
+    match = re.fullmatch(rf"\s*({DECIMAL})\s*(mm|cm|in|px|pt|pc)?\s*", text or "")
     if not match:
         raise ValueError(f"cannot read the length {text!r} (a number with mm, cm, in, px, pt or pc)")
     return float(match.group(1)) * MM_PER[match.group(2) or default_unit]
@@ -110,7 +109,7 @@ def _document_matrix(root):
     view_box = root.get("viewBox")
     if view_box is None:
         return np.diag([MM_PER["px"], MM_PER["px"], 1.0])
-    values = [float(value) for value in re.findall(NUMBER, view_box)]
+    values = [float(value) for value in re.findall(DECIMAL, view_box)]
     if len(values) != 4:
         raise ValueError(f"cannot read the viewBox {view_box!r} (four numbers: x, y, width, height)")
     x0, y0, width, height = values
@@ -125,7 +124,7 @@ def _transform(text):
     """The 3x3 matrix of an SVG ``transform`` attribute (identity when absent)."""
     matrix = np.eye(3)
     for name, arguments in re.findall(r"(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)", text or ""):
-        values = [float(value) for value in re.findall(NUMBER, arguments)]
+        values = [float(value) for value in re.findall(DECIMAL, arguments)]
         if len(values) not in TRANSFORM_ARGUMENTS[name]:
             raise ValueError(f"cannot read the transform {name}({arguments.strip()})")
         matrix = matrix @ _one_transform(name, values)
@@ -190,7 +189,7 @@ def _number(element, name):
     value = element.get(name)
     if value is None:
         return 0.0
-    numbers = re.findall(NUMBER, value)
+    numbers = re.findall(DECIMAL, value)
     if not numbers:
         raise ValueError(f"cannot read <{_tag(element)} {name}={value!r}> (a number)")
     return float(numbers[0])
@@ -211,7 +210,7 @@ def _element_paths(tag, element):
     if tag == "path":
         return path_strokes(element.get("d") or "")
     if tag in ("polyline", "polygon"):
-        values = [float(value) for value in re.findall(NUMBER, element.get("points") or "")]
+        values = [float(value) for value in re.findall(DECIMAL, element.get("points") or "")]
         points = np.array(values[: len(values) // 2 * 2]).reshape(-1, 2) @ np.array([1.0, 1j])
         return [np.append(points, points[:1]) if tag == "polygon" and len(points) else points]
     if tag == "line":
